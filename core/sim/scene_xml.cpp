@@ -1,0 +1,103 @@
+#include "sim/scene_xml.h"
+
+#include <fmt/format.h>
+
+#include "common/error.h"
+#include "sim/world_layout.h"
+#include "sim_mjcf.h"
+
+namespace pnp::sim {
+namespace {
+
+std::string_view robot_fragment(Robot robot) {
+  switch (robot) {
+    case Robot::kFetch: return mjcf::kfetchXml;
+    case Robot::kPanda: return mjcf::kpandaXml;
+  }
+  throw_internal("robot_fragment: unknown Robot value");
+}
+
+// Options and classes. Arm links are visual only; the palm, the finger pads, the object,
+// the table and the floor collide. Finger pads use torsional friction (condim 4) so a
+// thin cylinder does not spin out of the grasp.
+std::string head(Robot robot, ObjectShape object) {
+  return fmt::format(R"(<mujoco model="pnp_{}_{}">
+  <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
+  <option timestep="{}" iterations="30" tolerance="1e-8" cone="pyramidal"/>
+  <size njmax="300" nconmax="60"/>
+  <default>
+    <geom contype="0" conaffinity="0" friction="1 0.005 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"/>
+    <joint damping="0" armature="0"/>
+    <default class="visual"><geom contype="0" conaffinity="0" group="1" rgba="0.7 0.7 0.75 1"/></default>
+    <default class="collide"><geom contype="1" conaffinity="1" condim="3"/></default>
+    <default class="pad"><geom type="box" contype="1" conaffinity="1" condim="4" mass="0.08"
+                               friction="1.5 0.01 0.0001" rgba="0.2 0.2 0.2 1"/></default>
+    <default class="arm"><joint type="hinge" axis="0 0 1" damping="4" armature="0.05"/></default>
+    <default class="finger">
+      <joint type="slide" damping="20" armature="0.01"/>
+      <position kp="1000" forcerange="-40 40"/>
+    </default>
+  </default>
+)",
+                     robot_name(robot), object_name(object), layout::kPhysicsTimestep_s);
+}
+
+std::string object_geom(const ObjectSpec& spec) {
+  if (spec.is_cylinder) {
+    return fmt::format(R"(type="cylinder" size="{} {}")", spec.half_width_m, spec.half_height_m);
+  }
+  return fmt::format(R"(type="box" size="{0} {0} {1}")", spec.half_width_m, spec.half_height_m);
+}
+
+std::string scene_bodies(ObjectShape object) {
+  const ObjectSpec& spec = object_spec(object);
+  const auto& start = layout::kGripperStart;
+  return fmt::format(
+      R"(  <worldbody>
+    <light pos="1.3 0.75 2.5" dir="0 0 -1" directional="true"/>
+    <geom name="floor" class="collide" type="plane" size="3 3 0.1" rgba="0.5 0.55 0.6 1"/>
+    <body name="table" pos="{} {} {}">
+      <geom name="table" class="collide" type="box" size="{} {} {}" rgba="0.6 0.45 0.3 1"/>
+    </body>
+    <body name="object" pos="{} {} {}">
+      <freejoint name="object"/>
+      <geom name="object" class="collide" {} mass="{}" condim="4" rgba="0.2 0.4 0.9 1"/>
+    </body>
+    <body name="target" mocap="true" pos="{} {} {}">
+      <site name="target" type="sphere" size="0.02" rgba="0.9 0.1 0.1 0.4"/>
+    </body>
+    <body name="gripper_target" mocap="true" pos="{} {} {}" quat="0 0 1 0"/>
+  </worldbody>
+  <equality>
+    <weld name="gripper_follows_target" body1="gripper_target" body2="gripper"
+          relpose="0 0 0 1 0 0 0" solref="0.02 1" solimp="0.9 0.95 0.001"/>
+  </equality>
+)",
+      layout::kTableCenter_x, layout::kTableCenter_y, layout::kTableTop_z / 2,
+      layout::kTableHalfX, layout::kTableHalfY, layout::kTableTop_z / 2, start.x(), start.y() + 0.12,
+      layout::kTableTop_z + spec.half_height_m, object_geom(spec), spec.mass_kg, start.x(),
+      start.y(), layout::kTableTop_z + spec.half_height_m, start.x(), start.y(), start.z());
+}
+
+// The robot fragment is a complete <mujoco> document; its children are spliced in.
+std::string_view fragment_body(std::string_view fragment) {
+  const auto open = fragment.find("<mujoco>");
+  const auto close = fragment.rfind("</mujoco>");
+  if (open == std::string_view::npos || close == std::string_view::npos || close < open) {
+    throw_internal("robot MJCF fragment is not wrapped in <mujoco>...</mujoco>");
+  }
+  const auto begin = open + std::string_view("<mujoco>").size();
+  return fragment.substr(begin, close - begin);
+}
+
+}  // namespace
+
+std::string scene_xml(Robot robot, ObjectShape object) {
+  std::string xml = head(robot, object);
+  xml += scene_bodies(object);
+  xml += fragment_body(robot_fragment(robot));
+  xml += "</mujoco>\n";
+  return xml;
+}
+
+}  // namespace pnp::sim

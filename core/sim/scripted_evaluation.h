@@ -1,0 +1,37 @@
+#pragma once
+// Evaluates the scripted pipeline over many seeded episodes. Episode i always uses
+// derive_seed(seed, i), and results are gathered by episode index, so the report is
+// identical at any thread count.
+
+#include <cstdint>
+#include <vector>
+
+#include "sim/object_shape.h"
+#include "sim/robot.h"
+#include "sim/scripted_pipeline.h"
+
+namespace pnp::sim {
+
+struct ScriptedEvalReport {
+  Robot robot = Robot::kFetch;
+  ObjectShape object = ObjectShape::kBlock;
+  std::uint64_t seed = 0;
+  int episodes = 0;
+  double success_rate = 0;
+  double success_ci95_low = 0;   // Wilson score interval
+  double success_ci95_high = 0;
+  double mean_steps = 0;         // steps until retract ended (the pipeline's active steps)
+  double std_steps = 0;
+  long long env_steps = 0;       // every environment step taken, idle ones included
+  std::array<double, kNumSubtasks> subtask_success_rate{};  // ended by its predicate
+  std::array<double, kNumSubtasks> subtask_mean_steps{};
+  double mean_final_distance_m = 0;
+  int physics_faults = 0;
+  std::vector<int> failed_episodes;  // indices, for reproduction with --seed
+};
+
+// episodes and threads must be positive (threads == 0: one per hardware thread).
+ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
+                                     std::uint64_t seed, std::size_t threads = 0);
+
+}  // namespace pnp::sim

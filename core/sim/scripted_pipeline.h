@@ -1,0 +1,26 @@
+#pragma once
+// Runs one episode with the three scripted experts in sequence: approach, manipulate,
+// retract, each until its termination predicate or its step cap, then idle with the
+// gripper closed until step 50. Success is read at the last step, from the object.
+
+#include <array>
+#include <cstdint>
+
+#include "sim/pick_place_env.h"
+#include "sim/subtask.h"
+
+namespace pnp::sim {
+
+struct EpisodeOutcome {
+  bool success = false;            // object within 0.05 m of the goal after step 50
+  int active_steps = 0;            // steps until retract ended (50 if it never did)
+  int env_steps = 0;               // every step taken, idle ones included
+  std::array<int, kNumSubtasks> subtask_steps{};
+  std::array<bool, kNumSubtasks> subtask_done{};  // ended by its predicate, not its cap
+  double final_distance_m = 0;     // object to goal at the end
+  bool physics_fault = false;
+};
+
+EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed);
+
+}  // namespace pnp::sim

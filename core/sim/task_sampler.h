@@ -1,0 +1,20 @@
+#pragma once
+// Where each episode puts the object and the goal (the paper's FetchPickAndPlace
+// variant): object xy within +-0.15 m of the gripper's start xy and at least 0.10 m
+// from it, resting on the table; goal xy within +-0.15 m, on the table or, with
+// probability 0.5, raised by up to 0.15 m.
+
+#include <Eigen/Core>
+
+#include "common/rng.h"
+
+namespace pnp::sim {
+
+struct EpisodeLayout {
+  Eigen::Vector3d object;  // object centre at rest
+  Eigen::Vector3d goal;    // where the object centre must go
+};
+
+EpisodeLayout sample_episode_layout(Rng& rng, double object_half_height_m);
+
+}  // namespace pnp::sim

@@ -1,0 +1,45 @@
+#pragma once
+// The task frame shared by both robots: table, gripper start, sampling regions, control
+// scaling and episode timing. Every number here is used by the MJCF generator, the
+// samplers, the experts and the tests alike, so each is defined exactly once.
+
+#include <Eigen/Core>
+
+namespace pnp::sim::layout {
+
+// Time: a policy step is 20 physics substeps of 2 ms (40 ms, 25 Hz); 50 steps an episode.
+inline constexpr double kPhysicsTimestep_s = 0.002;
+inline constexpr int kSubstepsPerStep = 20;
+inline constexpr double kStepDuration_s = kPhysicsTimestep_s * kSubstepsPerStep;
+inline constexpr int kEpisodeSteps = 50;
+
+// Table: a box whose top surface is at kTableTop_z.
+inline constexpr double kTableCenter_x = 1.30;
+inline constexpr double kTableCenter_y = 0.75;
+inline constexpr double kTableHalfX = 0.25;
+inline constexpr double kTableHalfY = 0.35;
+inline constexpr double kTableTop_z = 0.40;
+
+// The gripper starts 0.2 m above the table, pointing down, at the centre of the region
+// where objects and goals are sampled.
+inline const Eigen::Vector3d kGripperStart{1.34, 0.75, kTableTop_z + 0.20};
+
+// Sampling (the paper's variant of FetchPickAndPlace).
+inline constexpr double kObjectRange = 0.15;           // object xy = start xy + U(-r, r)^2
+inline constexpr double kObjectMinDistance = 0.10;     // ... at least this far from start xy
+inline constexpr double kGoalRange = 0.15;             // goal xy = start xy + U(-r, r)^2
+inline constexpr double kGoalAirProbability = 0.5;     // goal raised with this probability
+inline constexpr double kGoalMaxHeight = 0.15;         // ... by U(0, h) above resting height
+
+// Control: action xyz in [-1, 1] times this moves the gripper's mocap target per step.
+inline constexpr double kActionPositionScale = 0.05;
+
+// The mocap target is kept inside this box (world frame, m) so that a learner's random
+// exploration can never drag the arm out of its reachable workspace.
+inline const Eigen::Vector3d kWorkspaceMin{1.05, 0.40, kTableTop_z + 0.005};
+inline const Eigen::Vector3d kWorkspaceMax{1.55, 1.10, kTableTop_z + 0.45};
+
+// Task success: the object's centre within this distance of the episode goal.
+inline constexpr double kTaskSuccessDistance = 0.05;
+
+}  // namespace pnp::sim::layout
