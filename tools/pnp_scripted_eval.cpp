@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <array>
 #include <string>
+#include <vector>
 
 #include "common/validate.h"
 #include "sim/scripted_evaluation.h"
@@ -35,7 +37,7 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
           {"failed_episodes", r.failed_episodes}};
 }
 
-void print_table(const pnp::sim::ScriptedEvalReport& r) {
+void print_cell(const pnp::sim::ScriptedEvalReport& r) {
   std::printf("robot %s, object %s, seed %llu, %d episodes\n",
               std::string(pnp::sim::robot_name(r.robot)).c_str(),
               std::string(pnp::sim::object_name(r.object)).c_str(),
@@ -52,6 +54,24 @@ void print_table(const pnp::sim::ScriptedEvalReport& r) {
   std::printf("  physics faults %d\n", r.physics_faults);
 }
 
+void print_summary_table(const std::vector<pnp::sim::ScriptedEvalReport>& reports) {
+  std::printf("%-7s %-12s %9s %9s %15s %13s %7s\n", "robot", "object", "episodes", "success",
+              "95% CI", "active steps", "faults");
+  for (const auto& r : reports) {
+    std::printf("%-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
+                std::string(pnp::sim::robot_name(r.robot)).c_str(),
+                std::string(pnp::sim::object_name(r.object)).c_str(), r.episodes, r.success_rate,
+                r.success_ci95_low, r.success_ci95_high, r.mean_steps, r.std_steps, r.physics_faults);
+  }
+}
+
+template <typename T, std::size_t N>
+std::vector<T> select(const std::string& name, const std::array<T, N>& all, T (*parse)(std::string_view, std::string_view),
+                      const char* field) {
+  if (name == "all") return {all.begin(), all.end()};
+  return {parse(name, field)};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,8 +82,8 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 0;
   std::size_t threads = 0;
   bool json = false;
-  app.add_option("--robot", robot, "fetch or panda")->capture_default_str();
-  app.add_option("--object", object, "block, small_block or cylinder")->capture_default_str();
+  app.add_option("--robot", robot, "fetch, panda or all")->capture_default_str();
+  app.add_option("--object", object, "block, small_block, cylinder or all")->capture_default_str();
   app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")->capture_default_str();
   app.add_option("--seed", seed, "episode i uses a seed derived from (seed, i)")->capture_default_str();
   app.add_option("--threads", threads, "worker threads (0: all cores); never changes results")
@@ -71,13 +91,26 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "print one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
     pnp::require_positive(episodes, "--episodes");
-    const auto report = pnp::sim::evaluate_scripted(pnp::sim::parse_robot(robot, "--robot"),
-                                                    pnp::sim::parse_object(object, "--object"),
-                                                    episodes, seed, threads);
+    const auto robots = select(robot, pnp::sim::kAllRobots, &pnp::sim::parse_robot, "--robot");
+    const auto objects = select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
+    std::vector<pnp::sim::ScriptedEvalReport> reports;
+    for (auto r : robots) {
+      for (auto o : objects) reports.push_back(pnp::sim::evaluate_scripted(r, o, episodes, seed, threads));
+    }
+    if (reports.size() == 1) {
+      if (json) {
+        std::cout << to_json(reports.front()).dump() << "\n";
+      } else {
+        print_cell(reports.front());
+      }
+      return;
+    }
     if (json) {
-      std::cout << to_json(report).dump() << "\n";
+      nlohmann::json cells = nlohmann::json::array();
+      for (const auto& r : reports) cells.push_back(to_json(r));
+      std::cout << nlohmann::json{{"cells", cells}}.dump() << "\n";
     } else {
-      print_table(report);
+      print_summary_table(reports);
     }
   });
 }
