@@ -4,8 +4,8 @@
 // loops simulate identical trajectories. overhead_ratio = env time / raw physics time.
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -57,7 +57,8 @@ struct ScriptedDriver {
   void advance(const StepResult& r) {
     if (stage >= kNumSubtasks) return;
     ++steps_in_stage;
-    if (r.objective_done || steps_in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)])) {
+    if (r.objective_done ||
+        steps_in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)])) {
       ++stage;
       steps_in_stage = 0;
     }
@@ -65,7 +66,8 @@ struct ScriptedDriver {
 };
 
 // Runs `episodes` scripted episodes; returns the seconds spent inside env.step().
-double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed, std::vector<EpisodeRecord>* log) {
+double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed,
+                std::vector<EpisodeRecord>* log) {
   double seconds = 0;
   const mjModel* m = env.mj_model();
   for (int e = 0; e < episodes; ++e) {
@@ -73,9 +75,13 @@ double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed, std::vector
     EpisodeRecord record;
     if (log) {
       const mjData* d = env.mj_data();
-      record = {{d->qpos, d->qpos + m->nq}, {d->qvel, d->qvel + m->nv},
-                {d->mocap_pos, d->mocap_pos + 3 * m->nmocap}, {d->mocap_quat, d->mocap_quat + 4 * m->nmocap},
-                capture_inputs(m, d), {}, {}};
+      record = {{d->qpos, d->qpos + m->nq},
+                {d->qvel, d->qvel + m->nv},
+                {d->mocap_pos, d->mocap_pos + 3 * m->nmocap},
+                {d->mocap_quat, d->mocap_quat + 4 * m->nmocap},
+                capture_inputs(m, d),
+                {},
+                {}};
     }
     ScriptedDriver driver;
     while (!env.needs_reset()) {
@@ -117,7 +123,8 @@ double time_raw_physics(const mjModel* m, mjData* d, const std::vector<EpisodeRe
     }
     seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     for (int i = 0; i < m->nq; ++i) {
-      max_qpos_deviation = std::max(max_qpos_deviation, std::abs(rec.final_qpos[static_cast<std::size_t>(i)] - d->qpos[i]));
+      max_qpos_deviation = std::max(
+          max_qpos_deviation, std::abs(rec.final_qpos[static_cast<std::size_t>(i)] - d->qpos[i]));
     }
   }
   return seconds;
@@ -152,7 +159,8 @@ double time_vec_env(VecEnv& vec, int steps_per_env, std::uint64_t seed) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Benchmark environment steps per second against raw MuJoCo physics", "pnp-bench-env"};
+  CLI::App app{"Benchmark environment steps per second against raw MuJoCo physics",
+               "pnp-bench-env"};
   std::string robot = "fetch", object = "block";
   int episodes = 20, rounds = 5;
   std::size_t threads = 0;
@@ -160,15 +168,18 @@ int main(int argc, char** argv) {
   bool json = false;
   app.add_option("--robot", robot)->capture_default_str();
   app.add_option("--object", object)->capture_default_str();
-  app.add_option("--episodes", episodes, "episodes per round (50 steps each)")->capture_default_str();
-  app.add_option("--rounds", rounds, "alternating env/raw rounds; the best round counts")->capture_default_str();
+  app.add_option("--episodes", episodes, "episodes per round (50 steps each)")
+      ->capture_default_str();
+  app.add_option("--rounds", rounds, "alternating env/raw rounds; the best round counts")
+      ->capture_default_str();
   app.add_option("--threads", threads, "threads for the all-threads figure (0: all cores)");
   app.add_option("--seed", seed)->capture_default_str();
   app.add_flag("--json", json, "print one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
     pnp::require_positive(episodes, "--episodes");
     pnp::require_positive(rounds, "--rounds");
-    const auto world = WorldModel::load(parse_robot(robot, "--robot"), parse_object(object, "--object"));
+    const auto world =
+        WorldModel::load(parse_robot(robot, "--robot"), parse_object(object, "--object"));
     PickPlaceEnv env(world);
     pnp::sim::DataPtr raw = pnp::sim::make_data(world->mj());
     double best_env = 1e300, best_raw = 1e300;
@@ -180,7 +191,8 @@ int main(int argc, char** argv) {
       std::vector<EpisodeRecord> log;
       time_env(env, episodes, seed, &log);  // records the inputs (untimed pass)
       best_env = std::min(best_env, time_env(env, episodes, seed, nullptr));
-      best_raw = std::min(best_raw, time_raw_physics(world->mj(), raw.get(), log, max_qpos_deviation));
+      best_raw =
+          std::min(best_raw, time_raw_physics(world->mj(), raw.get(), log, max_qpos_deviation));
     }
     const double steps = static_cast<double>(episodes) * pnp::sim::layout::kEpisodeSteps;
 
@@ -188,8 +200,10 @@ int main(int argc, char** argv) {
     VecEnv vec_all(world, static_cast<long long>(vec.threads()), vec.threads());
     const int steps_per_env = episodes * pnp::sim::layout::kEpisodeSteps;
     double best_vec = 1e300;
-    for (int r = 0; r < rounds; ++r) best_vec = std::min(best_vec, time_vec_env(vec_all, steps_per_env, seed));
-    const double vec_steps = static_cast<double>(steps_per_env) * static_cast<double>(vec_all.size());
+    for (int r = 0; r < rounds; ++r)
+      best_vec = std::min(best_vec, time_vec_env(vec_all, steps_per_env, seed));
+    const double vec_steps =
+        static_cast<double>(steps_per_env) * static_cast<double>(vec_all.size());
 
     nlohmann::json out = {
         {"robot", robot},

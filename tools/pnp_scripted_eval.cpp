@@ -1,10 +1,10 @@
 // pnp-scripted-eval: runs the three scripted experts in sequence over seeded episodes and
 // prints the success rate. Output depends only on the flags (never on --threads or time).
 
+#include <array>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <array>
 #include <string>
 #include <vector>
 
@@ -42,8 +42,8 @@ void print_cell(const pnp::sim::ScriptedEvalReport& r) {
               std::string(pnp::sim::robot_name(r.robot)).c_str(),
               std::string(pnp::sim::object_name(r.object)).c_str(),
               static_cast<unsigned long long>(r.seed), r.episodes);
-  std::printf("  success rate   %.3f  (95%% CI %.3f-%.3f)\n", r.success_rate,
-              r.success_ci95_low, r.success_ci95_high);
+  std::printf("  success rate   %.3f  (95%% CI %.3f-%.3f)\n", r.success_rate, r.success_ci95_low,
+              r.success_ci95_high);
   std::printf("  active steps   %.1f +- %.1f of 50\n", r.mean_steps, r.std_steps);
   for (auto s : pnp::sim::kAllSubtasks) {
     const auto k = static_cast<std::size_t>(s);
@@ -61,13 +61,14 @@ void print_summary_table(const std::vector<pnp::sim::ScriptedEvalReport>& report
     std::printf("%-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
                 std::string(pnp::sim::robot_name(r.robot)).c_str(),
                 std::string(pnp::sim::object_name(r.object)).c_str(), r.episodes, r.success_rate,
-                r.success_ci95_low, r.success_ci95_high, r.mean_steps, r.std_steps, r.physics_faults);
+                r.success_ci95_low, r.success_ci95_high, r.mean_steps, r.std_steps,
+                r.physics_faults);
   }
 }
 
 template <typename T, std::size_t N>
-std::vector<T> select(const std::string& name, const std::array<T, N>& all, T (*parse)(std::string_view, std::string_view),
-                      const char* field) {
+std::vector<T> select(const std::string& name, const std::array<T, N>& all,
+                      T (*parse)(std::string_view, std::string_view), const char* field) {
   if (name == "all") return {all.begin(), all.end()};
   return {parse(name, field)};
 }
@@ -75,7 +76,8 @@ std::vector<T> select(const std::string& name, const std::array<T, N>& all, T (*
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Evaluate the scripted approach -> manipulate -> retract pipeline", "pnp-scripted-eval"};
+  CLI::App app{"Evaluate the scripted approach -> manipulate -> retract pipeline",
+               "pnp-scripted-eval"};
   std::string robot = "fetch";
   std::string object = "block";
   long long episodes = 100;
@@ -84,18 +86,22 @@ int main(int argc, char** argv) {
   bool json = false;
   app.add_option("--robot", robot, "fetch, panda or all")->capture_default_str();
   app.add_option("--object", object, "block, small_block, cylinder or all")->capture_default_str();
-  app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")->capture_default_str();
-  app.add_option("--seed", seed, "episode i uses a seed derived from (seed, i)")->capture_default_str();
+  app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")
+      ->capture_default_str();
+  app.add_option("--seed", seed, "episode i uses a seed derived from (seed, i)")
+      ->capture_default_str();
   app.add_option("--threads", threads, "worker threads (0: all cores); never changes results")
       ->capture_default_str();
   app.add_flag("--json", json, "print one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
     pnp::require_positive(episodes, "--episodes");
     const auto robots = select(robot, pnp::sim::kAllRobots, &pnp::sim::parse_robot, "--robot");
-    const auto objects = select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
+    const auto objects =
+        select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
     std::vector<pnp::sim::ScriptedEvalReport> reports;
     for (auto r : robots) {
-      for (auto o : objects) reports.push_back(pnp::sim::evaluate_scripted(r, o, episodes, seed, threads));
+      for (auto o : objects)
+        reports.push_back(pnp::sim::evaluate_scripted(r, o, episodes, seed, threads));
     }
     if (reports.size() == 1) {
       if (json) {

@@ -9,16 +9,15 @@ namespace pnp {
 
 void require_size(std::size_t actual, std::size_t expected, std::string_view field) {
   if (actual != expected) {
-    throw_invalid_argument(field, std::to_string(expected) + " values",
-                           std::to_string(actual));
+    throw_invalid_argument(field, std::to_string(expected) + " values", std::to_string(actual));
   }
 }
 
 void require_finite(std::span<const double> values, std::string_view field) {
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i])) {
-      throw_invalid_argument(std::string(field) + "[" + std::to_string(i) + "]",
-                             "a finite number", std::to_string(values[i]));
+      throw_invalid_argument(std::string(field) + "[" + std::to_string(i) + "]", "a finite number",
+                             std::to_string(values[i]));
     }
   }
 }

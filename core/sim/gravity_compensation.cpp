@@ -14,7 +14,8 @@ void GravityCompensation::apply(const mjModel* m, mjData* d) {
   const mjtNum* g = m->opt.gravity;
   for (int dof = 0; dof < m->nv; ++dof) {
     mjtNum torque = 0;
-    for (int k = 0; k < 3; ++k) torque -= jacobian_[static_cast<std::size_t>(k * m->nv + dof)] * g[k];
+    for (int k = 0; k < 3; ++k)
+      torque -= jacobian_[static_cast<std::size_t>(k * m->nv + dof)] * g[k];
     // Only the arm's dofs have a non-zero Jacobian column; the object's stay untouched.
     d->qfrc_applied[dof] = torque * subtree_mass_;
   }

@@ -60,7 +60,8 @@ IkResult solve_site_ik(const mjModel* m, mjData* d, int site, std::span<const in
     }
     const Eigen::Matrix<double, 6, 6> jjt =
         jac * jac.transpose() + options.damping * Eigen::Matrix<double, 6, 6>::Identity();
-    const Eigen::MatrixXd pinv = jac.transpose() * jjt.ldlt().solve(Eigen::Matrix<double, 6, 6>::Identity());
+    const Eigen::MatrixXd pinv =
+        jac.transpose() * jjt.ldlt().solve(Eigen::Matrix<double, 6, 6>::Identity());
     const Eigen::VectorXd nullspace =
         (Eigen::MatrixXd::Identity(n, n) - pinv * jac) * (options.nullspace_gain * to_nominal);
     const Eigen::VectorXd dq = pinv * error + nullspace;

@@ -17,8 +17,8 @@ struct IkTarget {
 
 struct IkOptions {
   int max_iterations = 400;
-  double damping = 1e-5;          // lambda^2: small, or the null-space pull biases the fix point
-  double nullspace_gain = 0.05;   // pull towards the nominal posture per iteration
+  double damping = 1e-5;         // lambda^2: small, or the null-space pull biases the fix point
+  double nullspace_gain = 0.05;  // pull towards the nominal posture per iteration
   double position_tolerance_m = 1e-5;
   double rotation_tolerance_rad = 1e-4;
 };

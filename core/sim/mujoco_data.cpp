@@ -8,7 +8,9 @@
 namespace pnp::sim {
 namespace {
 
-void warning_to_stderr(const char* message) { std::fprintf(stderr, "mujoco: %s\n", message); }
+void warning_to_stderr(const char* message) {
+  std::fprintf(stderr, "mujoco: %s\n", message);
+}
 
 }  // namespace
 

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 
 namespace pnp::sim {
@@ -17,28 +18,30 @@ constexpr ObjectSpec kCylinderSpec{true, 0.010, 0.030, 0.020};
 
 std::string_view object_name(ObjectShape shape) {
   switch (shape) {
-    case ObjectShape::kBlock: return "block";
-    case ObjectShape::kSmallBlock: return "small_block";
-    case ObjectShape::kCylinder: return "cylinder";
+    case ObjectShape::kBlock:
+      return "block";
+    case ObjectShape::kSmallBlock:
+      return "small_block";
+    case ObjectShape::kCylinder:
+      return "cylinder";
   }
   throw_internal("object_name: unknown ObjectShape value");
 }
 
 const ObjectSpec& object_spec(ObjectShape shape) {
   switch (shape) {
-    case ObjectShape::kBlock: return kBlockSpec;
-    case ObjectShape::kSmallBlock: return kSmallBlockSpec;
-    case ObjectShape::kCylinder: return kCylinderSpec;
+    case ObjectShape::kBlock:
+      return kBlockSpec;
+    case ObjectShape::kSmallBlock:
+      return kSmallBlockSpec;
+    case ObjectShape::kCylinder:
+      return kCylinderSpec;
   }
   throw_internal("object_spec: unknown ObjectShape value");
 }
 
 ObjectShape parse_object(std::string_view name, std::string_view field) {
-  for (ObjectShape shape : kAllObjectShapes) {
-    if (object_name(shape) == name) return shape;
-  }
-  throw_invalid_argument(field, "one of block, small_block, cylinder",
-                         "\"" + std::string(name) + "\"");
+  return parse_enum<ObjectShape>(name, kAllObjectShapes, &object_name, field);
 }
 
 }  // namespace pnp::sim

@@ -17,15 +17,15 @@ using Action = Eigen::Vector4d;  // xyz in [-1, 1] (x 0.05 m per step), gripper 
 using Goal = Eigen::Vector3d;
 
 namespace obs {
-inline constexpr int kGripperPos = 0;       // 0-2   grip site position
-inline constexpr int kObjectPos = 3;        // 3-5   object centre position
-inline constexpr int kObjectRelPos = 6;     // 6-8   object - gripper position
-inline constexpr int kFingerPos = 9;        // 9-10  finger joint positions (left, right)
-inline constexpr int kObjectEuler = 11;     // 11-13 object orientation, roll pitch yaw
-inline constexpr int kObjectRelVel = 14;    // 14-16 object - gripper linear velocity x dt
-inline constexpr int kObjectAngVel = 17;    // 17-19 object angular velocity x dt
-inline constexpr int kGripperVel = 20;      // 20-22 gripper linear velocity x dt
-inline constexpr int kFingerVel = 23;       // 23-24 finger joint velocities x dt
+inline constexpr int kGripperPos = 0;     // 0-2   grip site position
+inline constexpr int kObjectPos = 3;      // 3-5   object centre position
+inline constexpr int kObjectRelPos = 6;   // 6-8   object - gripper position
+inline constexpr int kFingerPos = 9;      // 9-10  finger joint positions (left, right)
+inline constexpr int kObjectEuler = 11;   // 11-13 object orientation, roll pitch yaw
+inline constexpr int kObjectRelVel = 14;  // 14-16 object - gripper linear velocity x dt
+inline constexpr int kObjectAngVel = 17;  // 17-19 object angular velocity x dt
+inline constexpr int kGripperVel = 20;    // 20-22 gripper linear velocity x dt
+inline constexpr int kFingerVel = 23;     // 23-24 finger joint velocities x dt
 }  // namespace obs
 
 inline Eigen::Vector3d gripper_position(const Observation& o) {

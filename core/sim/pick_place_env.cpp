@@ -11,7 +11,9 @@
 namespace pnp::sim {
 namespace {
 
-Eigen::Vector3d vec3(const mjtNum* p) { return {p[0], p[1], p[2]}; }
+Eigen::Vector3d vec3(const mjtNum* p) {
+  return {p[0], p[1], p[2]};
+}
 
 // Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll); `mat` is MuJoCo's row-major 3x3.
 Eigen::Vector3d euler_from_matrix(const mjtNum* mat) {
@@ -60,7 +62,8 @@ void PickPlaceEnv::start_episode() {
     d->mocap_pos[3 * ids.gripper_mocap + k] = layout::kGripperStart(k);
     d->mocap_pos[3 * ids.target_mocap + k] = episode.goal(k);
   }
-  for (int k = 0; k < 4; ++k) d->mocap_quat[4 * ids.gripper_mocap + k] = world_->gripper_down_quat()(k);
+  for (int k = 0; k < 4; ++k)
+    d->mocap_quat[4 * ids.gripper_mocap + k] = world_->gripper_down_quat()(k);
   for (int actuator : ids.finger_actuator) d->ctrl[actuator] = world_->finger_range_m();
 
   mj_forward(m, d);

@@ -28,9 +28,9 @@ namespace pnp::sim {
 
 enum class PhysicsFault {
   kNone,
-  kUnstable,      // MuJoCo flagged a bad qpos/qvel/qacc (it may have reset its data)
-  kNonFinite,     // NaN or Inf in the state
-  kCapacity,      // contact or constraint buffer full: contacts were dropped
+  kUnstable,   // MuJoCo flagged a bad qpos/qvel/qacc (it may have reset its data)
+  kNonFinite,  // NaN or Inf in the state
+  kCapacity,   // contact or constraint buffer full: contacts were dropped
 };
 
 struct StepResult {

@@ -11,8 +11,10 @@ namespace {
 
 std::string_view robot_fragment(Robot robot) {
   switch (robot) {
-    case Robot::kFetch: return mjcf::kfetchXml;
-    case Robot::kPanda: return mjcf::kpandaXml;
+    case Robot::kFetch:
+      return mjcf::kfetchXml;
+    case Robot::kPanda:
+      return mjcf::kpandaXml;
   }
   throw_internal("robot_fragment: unknown Robot value");
 }
@@ -73,8 +75,8 @@ std::string scene_bodies(ObjectShape object) {
           relpose="0 0 0 1 0 0 0" solref="0.02 1" solimp="0.9 0.95 0.001"/>
   </equality>
 )",
-      layout::kTableCenter_x, layout::kTableCenter_y, layout::kTableTop_z / 2,
-      layout::kTableHalfX, layout::kTableHalfY, layout::kTableTop_z / 2, start.x(), start.y() + 0.12,
+      layout::kTableCenter_x, layout::kTableCenter_y, layout::kTableTop_z / 2, layout::kTableHalfX,
+      layout::kTableHalfY, layout::kTableTop_z / 2, start.x(), start.y() + 0.12,
       layout::kTableTop_z + spec.half_height_m, object_geom(spec), spec.mass_kg, start.x(),
       start.y(), layout::kTableTop_z + spec.half_height_m, start.x(), start.y(), start.z());
 }

@@ -18,11 +18,11 @@ struct ScriptedEvalReport {
   std::uint64_t seed = 0;
   int episodes = 0;
   double success_rate = 0;
-  double success_ci95_low = 0;   // Wilson score interval
+  double success_ci95_low = 0;  // Wilson score interval
   double success_ci95_high = 0;
-  double mean_steps = 0;         // steps until retract ended (the pipeline's active steps)
+  double mean_steps = 0;  // steps until retract ended (the pipeline's active steps)
   double std_steps = 0;
-  long long env_steps = 0;       // every environment step taken, idle ones included
+  long long env_steps = 0;  // every environment step taken, idle ones included
   std::array<double, kNumSubtasks> subtask_success_rate{};  // ended by its predicate
   std::array<double, kNumSubtasks> subtask_mean_steps{};
   double mean_final_distance_m = 0;

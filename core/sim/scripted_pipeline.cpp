@@ -7,7 +7,7 @@ namespace pnp::sim {
 EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
   EpisodeOutcome out;
   env.reset(seed);
-  int stage = 0;             // index into kAllSubtasks; kNumSubtasks means idle
+  int stage = 0;  // index into kAllSubtasks; kNumSubtasks means idle
   int steps_in_stage = 0;
   StepResult last;
   while (!env.needs_reset()) {

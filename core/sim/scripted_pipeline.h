@@ -12,12 +12,12 @@
 namespace pnp::sim {
 
 struct EpisodeOutcome {
-  bool success = false;            // object within 0.05 m of the goal after step 50
-  int active_steps = 0;            // steps until retract ended (50 if it never did)
-  int env_steps = 0;               // every step taken, idle ones included
+  bool success = false;  // object within 0.05 m of the goal after step 50
+  int active_steps = 0;  // steps until retract ended (50 if it never did)
+  int env_steps = 0;     // every step taken, idle ones included
   std::array<int, kNumSubtasks> subtask_steps{};
   std::array<bool, kNumSubtasks> subtask_done{};  // ended by its predicate, not its cap
-  double final_distance_m = 0;     // object to goal at the end
+  double final_distance_m = 0;                    // object to goal at the end
   bool physics_fault = false;
 };
 

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "sim/world_layout.h"
 
@@ -11,7 +12,9 @@ TaskState TaskState::from(const Observation& o, const Goal& episode_goal, double
   return {gripper_position(o), object_position(o), finger_gap(o), episode_goal, object_width_m};
 }
 
-Objective objective_of(Subtask subtask) { return static_cast<Objective>(subtask); }
+Objective objective_of(Subtask subtask) {
+  return static_cast<Objective>(subtask);
+}
 
 std::string_view subtask_name(Subtask subtask) {
   return objective_name(objective_of(subtask));
@@ -19,37 +22,35 @@ std::string_view subtask_name(Subtask subtask) {
 
 std::string_view objective_name(Objective objective) {
   switch (objective) {
-    case Objective::kApproach: return "approach";
-    case Objective::kManipulate: return "manipulate";
-    case Objective::kRetract: return "retract";
-    case Objective::kTask: return "task";
+    case Objective::kApproach:
+      return "approach";
+    case Objective::kManipulate:
+      return "manipulate";
+    case Objective::kRetract:
+      return "retract";
+    case Objective::kTask:
+      return "task";
   }
   throw_internal("objective_name: unknown Objective value");
 }
 
 Subtask parse_subtask(std::string_view name, std::string_view field) {
-  for (Subtask subtask : kAllSubtasks) {
-    if (subtask_name(subtask) == name) return subtask;
-  }
-  throw_invalid_argument(field, "one of approach, manipulate, retract",
-                         "\"" + std::string(name) + "\"");
+  return parse_enum<Subtask>(name, kAllSubtasks, &subtask_name, field);
 }
 
 Objective parse_objective(std::string_view name, std::string_view field) {
-  for (int i = 0; i <= static_cast<int>(Objective::kTask); ++i) {
-    if (objective_name(static_cast<Objective>(i)) == name) return static_cast<Objective>(i);
-  }
-  throw_invalid_argument(field, "one of approach, manipulate, retract, task",
-                         "\"" + std::string(name) + "\"");
+  return parse_enum<Objective>(name, kAllObjectives, &objective_name, field);
 }
 
 Eigen::Vector3d objective_goal(Objective objective, const TaskState& s) {
   switch (objective) {
     case Objective::kApproach:
       return s.object + Eigen::Vector3d(0, 0, thresholds::kPreGraspHeight_m);
-    case Objective::kManipulate: return s.object;
+    case Objective::kManipulate:
+      return s.object;
     case Objective::kRetract:
-    case Objective::kTask: return s.episode_goal;
+    case Objective::kTask:
+      return s.episode_goal;
   }
   throw_internal("objective_goal: unknown Objective value");
 }
@@ -57,9 +58,11 @@ Eigen::Vector3d objective_goal(Objective objective, const TaskState& s) {
 Eigen::Vector3d achieved_goal(Objective objective, const TaskState& s) {
   switch (objective) {
     case Objective::kApproach:
-    case Objective::kManipulate: return s.gripper;
+    case Objective::kManipulate:
+      return s.gripper;
     case Objective::kRetract:
-    case Objective::kTask: return s.object;
+    case Objective::kTask:
+      return s.object;
   }
   throw_internal("achieved_goal: unknown Objective value");
 }
@@ -73,19 +76,24 @@ bool objective_done(Objective objective, const TaskState& s) {
   switch (objective) {
     case Objective::kApproach:
       return (s.gripper - objective_goal(objective, s)).norm() < thresholds::kApproachTolerance_m;
-    case Objective::kManipulate: return is_grasped(s);
+    case Objective::kManipulate:
+      return is_grasped(s);
     case Objective::kRetract:
       return (s.object - s.episode_goal).norm() < thresholds::kRetractTolerance_m;
-    case Objective::kTask: return false;  // the whole task runs to the episode's end
+    case Objective::kTask:
+      return false;  // the whole task runs to the episode's end
   }
   throw_internal("objective_done: unknown Objective value");
 }
 
 int step_cap(Subtask subtask) {
   switch (subtask) {
-    case Subtask::kApproach: return thresholds::kApproachStepCap;
-    case Subtask::kManipulate: return thresholds::kManipulateStepCap;
-    case Subtask::kRetract: return thresholds::kRetractStepCap;
+    case Subtask::kApproach:
+      return thresholds::kApproachStepCap;
+    case Subtask::kManipulate:
+      return thresholds::kManipulateStepCap;
+    case Subtask::kRetract:
+      return thresholds::kRetractStepCap;
   }
   throw_internal("step_cap: unknown Subtask value");
 }

@@ -26,6 +26,8 @@ inline constexpr std::array<Subtask, kNumSubtasks> kAllSubtasks{
     Subtask::kApproach, Subtask::kManipulate, Subtask::kRetract};
 
 enum class Objective { kApproach = 0, kManipulate = 1, kRetract = 2, kTask = 3 };
+inline constexpr std::array<Objective, 4> kAllObjectives{
+    Objective::kApproach, Objective::kManipulate, Objective::kRetract, Objective::kTask};
 
 namespace thresholds {
 inline constexpr double kPreGraspHeight_m = 0.03;     // approach target above the object

@@ -16,8 +16,8 @@ EpisodeLayout sample_episode_layout(Rng& rng, double object_half_height_m) {
   } while ((object_xy - start).norm() < kObjectMinDistance);
   out.object << object_xy, rest_z;
 
-  const Eigen::Vector2d goal_xy =
-      start + Eigen::Vector2d(rng.uniform(-kGoalRange, kGoalRange), rng.uniform(-kGoalRange, kGoalRange));
+  const Eigen::Vector2d goal_xy = start + Eigen::Vector2d(rng.uniform(-kGoalRange, kGoalRange),
+                                                          rng.uniform(-kGoalRange, kGoalRange));
   double goal_z = rest_z;
   if (rng.bernoulli(kGoalAirProbability)) goal_z += rng.uniform(0.0, kGoalMaxHeight);
   out.goal << goal_xy, goal_z;

@@ -25,11 +25,11 @@ inline constexpr double kTableTop_z = 0.40;
 inline const Eigen::Vector3d kGripperStart{1.34, 0.75, kTableTop_z + 0.20};
 
 // Sampling (the paper's variant of FetchPickAndPlace).
-inline constexpr double kObjectRange = 0.15;           // object xy = start xy + U(-r, r)^2
-inline constexpr double kObjectMinDistance = 0.10;     // ... at least this far from start xy
-inline constexpr double kGoalRange = 0.15;             // goal xy = start xy + U(-r, r)^2
-inline constexpr double kGoalAirProbability = 0.5;     // goal raised with this probability
-inline constexpr double kGoalMaxHeight = 0.15;         // ... by U(0, h) above resting height
+inline constexpr double kObjectRange = 0.15;        // object xy = start xy + U(-r, r)^2
+inline constexpr double kObjectMinDistance = 0.10;  // ... at least this far from start xy
+inline constexpr double kGoalRange = 0.15;          // goal xy = start xy + U(-r, r)^2
+inline constexpr double kGoalAirProbability = 0.5;  // goal raised with this probability
+inline constexpr double kGoalMaxHeight = 0.15;      // ... by U(0, h) above resting height
 
 // Control: action xyz in [-1, 1] times this moves the gripper's mocap target per step.
 inline constexpr double kActionPositionScale = 0.05;

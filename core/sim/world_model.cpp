@@ -51,8 +51,10 @@ int require_id(const mjModel* m, mjtObj type, const char* name) {
 // Starting guesses for the home-pose IK (elbow up, wrist over the table).
 std::array<double, kArmJoints> nominal_posture(Robot robot) {
   switch (robot) {
-    case Robot::kFetch: return {0.0, 0.3, 0.0, 1.0, 0.0, 0.27, 0.0};
-    case Robot::kPanda: return {0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785};
+    case Robot::kFetch:
+      return {0.0, 0.3, 0.0, 1.0, 0.0, 0.27, 0.0};
+    case Robot::kPanda:
+      return {0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785};
   }
   throw_internal("nominal_posture: unknown Robot value");
 }
@@ -96,7 +98,8 @@ void WorldModel::resolve_ids() {
     const int joint = require_id(m, mjOBJ_JOINT, finger_names[f]);
     ids_.finger_qpos[static_cast<std::size_t>(f)] = m->jnt_qposadr[joint];
     ids_.finger_dof[static_cast<std::size_t>(f)] = m->jnt_dofadr[joint];
-    ids_.finger_actuator[static_cast<std::size_t>(f)] = require_id(m, mjOBJ_ACTUATOR, finger_names[f]);
+    ids_.finger_actuator[static_cast<std::size_t>(f)] =
+        require_id(m, mjOBJ_ACTUATOR, finger_names[f]);
     finger_range_m_ = m->jnt_range[2 * joint + 1];
   }
   // The arm joints are the model's hinges, in kinematic-tree order.
@@ -119,11 +122,12 @@ void WorldModel::compute_home_state() {
   mjData* d = data.get();
 
   // Gripper pointing down: rotation by pi about world y (local z -> -z, fingers along y).
-  const Eigen::Quaterniond down(gripper_down_quat_(0), gripper_down_quat_(1),
-                                gripper_down_quat_(2), gripper_down_quat_(3));
+  const Eigen::Quaterniond down(gripper_down_quat_(0), gripper_down_quat_(1), gripper_down_quat_(2),
+                                gripper_down_quat_(3));
   const auto nominal = nominal_posture(robot_);
   for (int j = 0; j < kArmJoints; ++j) {
-    d->qpos[m->jnt_qposadr[ids_.arm_joints[static_cast<std::size_t>(j)]]] = nominal[static_cast<std::size_t>(j)];
+    d->qpos[m->jnt_qposadr[ids_.arm_joints[static_cast<std::size_t>(j)]]] =
+        nominal[static_cast<std::size_t>(j)];
   }
   const IkResult ik = solve_site_ik(m, d, ids_.grip_site, ids_.arm_joints,
                                     {layout::kGripperStart, down.toRotationMatrix()}, nominal);

@@ -59,7 +59,8 @@ class WorldModel {
   };
 
  public:
-  WorldModel(Passkey, Robot robot, ObjectShape object, std::unique_ptr<mjModel, ModelDeleter> model);
+  WorldModel(Passkey, Robot robot, ObjectShape object,
+             std::unique_ptr<mjModel, ModelDeleter> model);
 
  private:
   void resolve_ids();

@@ -47,7 +47,8 @@ class EnvBadInput : public ::testing::Test {
  protected:
   void SetUp() override {
     env_.reset(1);
-    env_.step(std::vector<double>{0.3, 0, 0, 1}, std::vector<double>{1.3, 0.7, 0.5}, Objective::kApproach);
+    env_.step(std::vector<double>{0.3, 0, 0, 1}, std::vector<double>{1.3, 0.7, 0.5},
+              Objective::kApproach);
   }
   PickPlaceEnv env_{testing::world()};
   const std::vector<double> good_goal_{1.3, 0.7, 0.5};
@@ -79,7 +80,8 @@ TEST_F(EnvBadInput, NaNOrWrongSizedGoal) {
 }
 
 TEST_F(EnvBadInput, OutOfRangeActionIsClippedNotRefused) {
-  const StepResult r = env_.step(std::vector<double>{50, 0, 0, 1}, good_goal_, Objective::kApproach);
+  const StepResult r =
+      env_.step(std::vector<double>{50, 0, 0, 1}, good_goal_, Objective::kApproach);
   EXPECT_EQ(r.fault, PhysicsFault::kNone);
   EXPECT_EQ(env_.elapsed_steps(), 2);
 }
@@ -103,7 +105,8 @@ TEST(EnvState, TheFiftyStepLimitIsEnforced) {
   expect_refused(env, {0, 0, 0, 1}, {1, 1, 1}, ErrorCode::kFailedPrecondition,
                  "step: the episode ended after 50 steps; call reset()");
   env.reset(3);
-  EXPECT_NO_THROW(env.step(std::vector<double>{0, 0, 0, 1}, std::vector<double>{1, 1, 1}, Objective::kTask));
+  EXPECT_NO_THROW(
+      env.step(std::vector<double>{0, 0, 0, 1}, std::vector<double>{1, 1, 1}, Objective::kTask));
 }
 
 TEST(Names, UnknownRobotOrObjectIsRefusedNamingTheField) {
@@ -118,7 +121,8 @@ TEST(Names, UnknownRobotOrObjectIsRefusedNamingTheField) {
     parse_object("sphere", "--object");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "--object: expected one of block, small_block, cylinder, got \"sphere\"");
+    EXPECT_STREQ(e.what(),
+                 "--object: expected one of block, small_block, cylinder, got \"sphere\"");
   }
 }
 
@@ -129,7 +133,8 @@ TEST(VecEnvInput, NonPositiveEnvCountIsRefused) {
       FAIL();
     } catch (const Error& e) {
       EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
-      EXPECT_EQ(std::string(e.what()), "num_envs: expected a positive integer, got " + std::to_string(n));
+      EXPECT_EQ(std::string(e.what()),
+                "num_envs: expected a positive integer, got " + std::to_string(n));
     }
   }
 }

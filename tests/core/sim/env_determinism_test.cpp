@@ -19,12 +19,16 @@ std::vector<double> trajectory(PickPlaceEnv& env, std::uint64_t seed) {
   env.reset(seed);
   int stage = 0, in_stage = 0;
   while (!env.needs_reset()) {
-    const Objective objective = stage < 3 ? objective_of(kAllSubtasks[static_cast<std::size_t>(stage)]) : Objective::kTask;
-    const Action a = stage < 3 ? scripted_action(kAllSubtasks[static_cast<std::size_t>(stage)], env.task_state()) : idle_action();
+    const Objective objective =
+        stage < 3 ? objective_of(kAllSubtasks[static_cast<std::size_t>(stage)]) : Objective::kTask;
+    const Action a =
+        stage < 3 ? scripted_action(kAllSubtasks[static_cast<std::size_t>(stage)], env.task_state())
+                  : idle_action();
     const StepResult r = env.step(a, env.objective_goal(objective), objective);
     out.insert(out.end(), r.observation.data(), r.observation.data() + kObservationSize);
     out.push_back(r.reward);
-    if (stage < 3 && (r.objective_done || ++in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)]))) {
+    if (stage < 3 && (r.objective_done ||
+                      ++in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)]))) {
       ++stage;
       in_stage = 0;
     }
@@ -68,7 +72,8 @@ TEST(Determinism, VecEnvIsIdenticalAtAnyThreadCount) {
       }
       vec.step(actions, goals, objectives, results);
       for (const StepResult& r : results) {
-        observed.insert(observed.end(), r.observation.data(), r.observation.data() + kObservationSize);
+        observed.insert(observed.end(), r.observation.data(),
+                        r.observation.data() + kObservationSize);
       }
     }
     return observed;

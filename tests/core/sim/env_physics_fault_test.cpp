@@ -45,7 +45,8 @@ TEST(PhysicsFault, NormalEpisodesReportNoFault) {
   PickPlaceEnv env(testing::world());
   env.reset(4);
   while (!env.needs_reset()) {
-    ASSERT_EQ(env.step(Action{0.5, -0.5, -0.5, -1}, Goal{1, 1, 1}, Objective::kTask).fault, PhysicsFault::kNone);
+    ASSERT_EQ(env.step(Action{0.5, -0.5, -0.5, -1}, Goal{1, 1, 1}, Objective::kTask).fault,
+              PhysicsFault::kNone);
   }
 }
 

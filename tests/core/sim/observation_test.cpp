@@ -28,8 +28,8 @@ TEST(Observation, LayoutAfterReset) {
     EXPECT_DOUBLE_EQ(o(obs::kFingerPos), d->qpos[ids.finger_qpos[0]]);
     EXPECT_DOUBLE_EQ(o(obs::kFingerPos + 1), d->qpos[ids.finger_qpos[1]]);
     EXPECT_NEAR(finger_gap(o), 2 * env.world().finger_range_m(), 1e-3);  // open
-    EXPECT_LT(o.segment<3>(obs::kObjectEuler).norm(), 1e-9);           // placed upright
-    EXPECT_LT(o.segment<11>(obs::kObjectRelVel).norm(), 1e-3);         // at rest (14-24)
+    EXPECT_LT(o.segment<3>(obs::kObjectEuler).norm(), 1e-9);             // placed upright
+    EXPECT_LT(o.segment<11>(obs::kObjectRelVel).norm(), 1e-3);           // at rest (14-24)
   }
 }
 
@@ -55,7 +55,8 @@ TEST(Observation, VelocitiesAreTheStateAfterTheStepTimesTheStepDuration) {
   // Mean speed over a step is about the commanded 0.4 x 5 cm.
   const Eigen::Vector3d before = gripper_position(r.observation);
   r = env.step(Action{0.4, 0, 0, 1}, goal, Objective::kApproach);
-  EXPECT_NEAR(gripper_position(r.observation).x() - before.x(), 0.4 * layout::kActionPositionScale, 0.005);
+  EXPECT_NEAR(gripper_position(r.observation).x() - before.x(), 0.4 * layout::kActionPositionScale,
+              0.005);
 }
 
 TEST(Observation, FingerEntriesFollowTheGripperCommand) {

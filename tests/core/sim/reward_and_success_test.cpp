@@ -49,7 +49,8 @@ TEST(StepSuccess, GripperAtTheGoalWithoutTheObjectIsNoSuccess) {
     r = env.step(Action{move.x(), move.y(), move.z(), 1}, env.episode_goal(), Objective::kTask);
   }
   ASSERT_LT((gripper_position(r.observation) - env.episode_goal()).norm(), 0.03);
-  EXPECT_GT((object_position(r.observation) - env.episode_goal()).norm(), layout::kTaskSuccessDistance);
+  EXPECT_GT((object_position(r.observation) - env.episode_goal()).norm(),
+            layout::kTaskSuccessDistance);
   EXPECT_FALSE(r.task_success);
 }
 
@@ -60,7 +61,8 @@ TEST(StepSuccess, ObjectAtTheGoalIsASuccess) {
   // success on the very next step with a goal at rest height).
   mjData* d = env.mj_data();
   const auto& ids = env.world().ids();
-  const Eigen::Vector3d target(1.40, 0.70, layout::kTableTop_z + env.world().object_spec().half_height_m);
+  const Eigen::Vector3d target(1.40, 0.70,
+                               layout::kTableTop_z + env.world().object_spec().half_height_m);
   for (int k = 0; k < 3; ++k) d->qpos[ids.object_qpos + k] = target(k);
   const Goal episode_goal = env.episode_goal();
   const StepResult r = env.step(Action{0, 0, 0, 1}, target, Objective::kRetract);

@@ -41,7 +41,8 @@ TEST(ScriptedPipeline, FailsWhenTheGraspIsSabotaged) {
   PickPlaceEnv env(testing::world());
   env.reset(derive_seed(3, 0));
   // Step the approach, then teleport the object far away before the grasp.
-  for (int t = 0; t < 3; ++t) env.step(Action{0, 0, 0, 1}, env.episode_goal(), Objective::kApproach);
+  for (int t = 0; t < 3; ++t)
+    env.step(Action{0, 0, 0, 1}, env.episode_goal(), Objective::kApproach);
   mjData* d = env.mj_data();
   d->qpos[env.world().ids().object_qpos + 0] = 1.10;
   d->qpos[env.world().ids().object_qpos + 1] = 0.45;

@@ -23,8 +23,10 @@ TEST(Approach, GoalIsThePreGraspPointAboveTheObject) {
 
 TEST(Approach, DoneWithinTheToleranceOfThePreGraspPoint) {
   const Eigen::Vector3d pre = kObject + Eigen::Vector3d(0, 0, thresholds::kPreGraspHeight_m);
-  EXPECT_TRUE(objective_done(Objective::kApproach, state_with(pre + Eigen::Vector3d(0.019, 0, 0), kObject)));
-  EXPECT_FALSE(objective_done(Objective::kApproach, state_with(pre + Eigen::Vector3d(0.021, 0, 0), kObject)));
+  EXPECT_TRUE(objective_done(Objective::kApproach,
+                             state_with(pre + Eigen::Vector3d(0.019, 0, 0), kObject)));
+  EXPECT_FALSE(objective_done(Objective::kApproach,
+                              state_with(pre + Eigen::Vector3d(0.021, 0, 0), kObject)));
 }
 
 TEST(Manipulate, DoneOnlyWhenCentredAndClosedOnTheObject) {
@@ -75,13 +77,18 @@ TEST(ScriptedExperts, ProportionalWithGainSixClippedToOne) {
   EXPECT_NEAR(a(1), 0.06, 1e-12);
   EXPECT_NEAR(a(2), 0.0, 1e-12);
   EXPECT_EQ(a(3), 1.0);  // approach keeps the gripper open
-  const Action far = scripted_action(Subtask::kApproach, state_with(kObject + Eigen::Vector3d(1, 0, 0), kObject));
+  const Action far =
+      scripted_action(Subtask::kApproach, state_with(kObject + Eigen::Vector3d(1, 0, 0), kObject));
   EXPECT_EQ(far(0), -1.0);
 }
 
 TEST(ScriptedExperts, ManipulateClosesOnlyOnceCentred) {
-  EXPECT_EQ(scripted_action(Subtask::kManipulate, state_with(kObject + Eigen::Vector3d(0, 0, 0.03), kObject))(3), 1.0);
-  EXPECT_EQ(scripted_action(Subtask::kManipulate, state_with(kObject + Eigen::Vector3d(0, 0, 0.01), kObject))(3), -1.0);
+  EXPECT_EQ(scripted_action(Subtask::kManipulate,
+                            state_with(kObject + Eigen::Vector3d(0, 0, 0.03), kObject))(3),
+            1.0);
+  EXPECT_EQ(scripted_action(Subtask::kManipulate,
+                            state_with(kObject + Eigen::Vector3d(0, 0, 0.01), kObject))(3),
+            -1.0);
 }
 
 TEST(ScriptedExperts, RetractMovesTheObjectTowardsTheGoalWithTheGripperClosed) {

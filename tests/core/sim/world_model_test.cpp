@@ -39,7 +39,8 @@ TEST_P(EveryWorld, HomePoseHasTheGripAtTheStartPointingDown) {
   std::copy(w->home_qpos().begin(), w->home_qpos().end(), d->qpos);
   mj_kinematics(m, d.get());
   const int site = w->ids().grip_site;
-  const Eigen::Vector3d grip(d->site_xpos[3 * site], d->site_xpos[3 * site + 1], d->site_xpos[3 * site + 2]);
+  const Eigen::Vector3d grip(d->site_xpos[3 * site], d->site_xpos[3 * site + 1],
+                             d->site_xpos[3 * site + 2]);
   EXPECT_LT((grip - layout::kGripperStart).norm(), 1e-3);
   // The site's z axis (third column of the row-major matrix) points down.
   EXPECT_NEAR(d->site_xmat[9 * site + 8], -1.0, 1e-3);
@@ -62,15 +63,15 @@ TEST_P(EveryWorld, ArmJointLimitsAreThoseOfTheRealArm) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllWorlds, EveryWorld,
-    ::testing::Combine(::testing::Values(Robot::kFetch, Robot::kPanda),
-                       ::testing::Values(ObjectShape::kBlock, ObjectShape::kSmallBlock,
-                                         ObjectShape::kCylinder)),
-    [](const auto& param_info) {
-      return std::string(robot_name(std::get<0>(param_info.param))) + "_" +
-             std::string(object_name(std::get<1>(param_info.param)));
-    });
+INSTANTIATE_TEST_SUITE_P(AllWorlds, EveryWorld,
+                         ::testing::Combine(::testing::Values(Robot::kFetch, Robot::kPanda),
+                                            ::testing::Values(ObjectShape::kBlock,
+                                                              ObjectShape::kSmallBlock,
+                                                              ObjectShape::kCylinder)),
+                         [](const auto& param_info) {
+                           return std::string(robot_name(std::get<0>(param_info.param))) + "_" +
+                                  std::string(object_name(std::get<1>(param_info.param)));
+                         });
 
 // Every point where an object or goal can be sampled is reachable with the gripper
 // pointing down, within joint limits, on both arms.
@@ -81,15 +82,18 @@ TEST(Reachability, EveryCornerOfTheSamplingRegion) {
     DataPtr d = make_data(m);
     const Eigen::Matrix3d down = Eigen::Quaterniond(0, 0, 1, 0).toRotationMatrix();
     std::array<double, kArmJoints> home{};
-    for (std::size_t j = 0; j < kArmJoints; ++j) home[j] = w->home_qpos()[static_cast<std::size_t>(m->jnt_qposadr[w->ids().arm_joints[j]])];
+    for (std::size_t j = 0; j < kArmJoints; ++j)
+      home[j] = w->home_qpos()[static_cast<std::size_t>(m->jnt_qposadr[w->ids().arm_joints[j]])];
     for (double dx : {-layout::kGoalRange, layout::kGoalRange}) {
       for (double dy : {-layout::kGoalRange, layout::kGoalRange}) {
-        for (double z : {layout::kTableTop_z + 0.015, layout::kTableTop_z + 0.025 + layout::kGoalMaxHeight}) {
+        for (double z :
+             {layout::kTableTop_z + 0.015, layout::kTableTop_z + 0.025 + layout::kGoalMaxHeight}) {
           std::copy(w->home_qpos().begin(), w->home_qpos().end(), d->qpos);
           const Eigen::Vector3d target = layout::kGripperStart + Eigen::Vector3d(dx, dy, 0);
           const IkResult r = solve_site_ik(m, d.get(), w->ids().grip_site, w->ids().arm_joints,
                                            {{target.x(), target.y(), z}, down}, home);
-          EXPECT_LT(r.position_error_m, 1e-3) << robot_name(robot) << " " << dx << " " << dy << " " << z;
+          EXPECT_LT(r.position_error_m, 1e-3)
+              << robot_name(robot) << " " << dx << " " << dy << " " << z;
           EXPECT_LT(r.rotation_error_rad, 1e-2) << robot_name(robot);
         }
       }
