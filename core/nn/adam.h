@@ -1,0 +1,41 @@
+#pragma once
+// Adam over a flat parameter buffer (Kingma and Ba, with bias correction). The moment
+// buffers are sized once; step() allocates nothing. One Adam can be shared by several
+// A3C workers: they apply gradients to the same parameters and statistics in turn.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace pnp::nn {
+
+struct AdamConfig {
+  double learning_rate = 1e-3;
+  double beta1 = 0.9;
+  double beta2 = 0.999;
+  double epsilon = 1e-8;
+};
+
+void validate(const AdamConfig& config, const char* field_prefix = "adam");
+
+class Adam {
+ public:
+  Adam(std::size_t parameter_count, AdamConfig config);
+
+  void step(std::span<float> params, std::span<const float> grads);
+  void set_learning_rate(double lr) { config_.learning_rate = lr; }
+  const AdamConfig& config() const { return config_; }
+  std::int64_t steps() const { return t_; }
+
+  // For checkpoints: moments and step count.
+  std::span<const float> first_moment() const { return m_; }
+  std::span<const float> second_moment() const { return v_; }
+  void restore(std::span<const float> m, std::span<const float> v, std::int64_t t);
+
+ private:
+  AdamConfig config_;
+  std::vector<float> m_, v_;
+  std::int64_t t_ = 0;
+};
+
+}  // namespace pnp::nn

@@ -1,0 +1,138 @@
+#include "nn/mlp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+
+namespace pnp::nn {
+namespace {
+
+// Tensors start on 16-float (64-byte) boundaries inside the flat buffer.
+std::size_t aligned(std::size_t n) {
+  return (n + 15) & ~std::size_t{15};
+}
+
+void validate(const MlpSpec& spec) {
+  if (spec.inputs <= 0)
+    throw_invalid_argument("inputs", "a positive width", std::to_string(spec.inputs));
+  if (spec.outputs <= 0)
+    throw_invalid_argument("outputs", "a positive width", std::to_string(spec.outputs));
+  for (std::size_t i = 0; i < spec.hidden.size(); ++i) {
+    if (spec.hidden[i] <= 0) {
+      throw_invalid_argument("hidden[" + std::to_string(i) + "]", "a positive width",
+                             std::to_string(spec.hidden[i]));
+    }
+  }
+}
+
+}  // namespace
+
+Mlp::Mlp(MlpSpec spec) : spec_(std::move(spec)) {
+  validate(spec_);
+  std::vector<int> widths{spec_.inputs};
+  widths.insert(widths.end(), spec_.hidden.begin(), spec_.hidden.end());
+  widths.push_back(spec_.outputs);
+  std::size_t size = 0;
+  for (std::size_t l = 0; l + 1 < widths.size(); ++l) {
+    Layer layer;
+    layer.in = widths[l];
+    layer.out = widths[l + 1];
+    layer.weight_offset = size;
+    size += aligned(static_cast<std::size_t>(layer.in * layer.out));
+    layer.bias_offset = size;
+    size += aligned(static_cast<std::size_t>(layer.out));
+    layer.activation = l + 2 == widths.size() ? spec_.output_activation : spec_.hidden_activation;
+    layers_.push_back(layer);
+  }
+  params_.assign(size, 0.0f);
+  grads_.assign(size, 0.0f);
+}
+
+void Mlp::zero_grads() {
+  std::fill(grads_.begin(), grads_.end(), 0.0f);
+}
+
+void Mlp::initialise(Rng& rng) {
+  std::fill(params_.begin(), params_.end(), 0.0f);
+  for (const Layer& layer : layers_) {
+    const double bound = 1.0 / std::sqrt(static_cast<double>(layer.in));
+    for (int i = 0; i < layer.in * layer.out; ++i) {
+      params_[layer.weight_offset + static_cast<std::size_t>(i)] =
+          static_cast<float>(rng.uniform(-bound, bound));
+    }
+    for (int i = 0; i < layer.out; ++i) {
+      params_[layer.bias_offset + static_cast<std::size_t>(i)] =
+          static_cast<float>(rng.uniform(-bound, bound));
+    }
+  }
+}
+
+ConstMatrixMap Mlp::weight(int l) const {
+  const Layer& layer = layers_[static_cast<std::size_t>(l)];
+  return {params_.data() + layer.weight_offset, layer.out, layer.in};
+}
+ConstVectorMap Mlp::bias(int l) const {
+  const Layer& layer = layers_[static_cast<std::size_t>(l)];
+  return {params_.data() + layer.bias_offset, layer.out};
+}
+MatrixMap Mlp::weight_grad(int l) {
+  const Layer& layer = layers_[static_cast<std::size_t>(l)];
+  return {grads_.data() + layer.weight_offset, layer.out, layer.in};
+}
+VectorMap Mlp::bias_grad(int l) {
+  const Layer& layer = layers_[static_cast<std::size_t>(l)];
+  return {grads_.data() + layer.bias_offset, layer.out};
+}
+
+const Matrix& Mlp::forward(const MatrixRef& x, MlpWorkspace& ws) const {
+  if (x.rows() != spec_.inputs) {
+    throw_invalid_argument("mlp input", std::to_string(spec_.inputs) + " rows",
+                           std::to_string(x.rows()));
+  }
+  const auto n = layers_.size();
+  ws.pre.resize(n);
+  ws.post.resize(n);
+  ensure_shape(ws.input, x.rows(), x.cols());
+  ws.input = x;
+  const Matrix* a = &ws.input;
+  for (std::size_t l = 0; l < n; ++l) {
+    Matrix& z = ws.pre[l];
+    ensure_shape(z, layers_[l].out, x.cols());
+    z.noalias() = weight(static_cast<int>(l)) * *a;
+    z.colwise() += bias(static_cast<int>(l));
+    apply_activation(layers_[l].activation, z, ws.post[l]);
+    a = &ws.post[l];
+  }
+  return ws.post.back();
+}
+
+void Mlp::backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_grads, Matrix* dx) {
+  const auto n = layers_.size();
+  ws.grad.resize(2);
+  Matrix* upstream = &ws.grad[0];
+  ensure_shape(*upstream, dy.rows(), dy.cols());
+  *upstream = dy;
+  for (std::size_t l = n; l-- > 0;) {
+    activation_backward(layers_[l].activation, ws.pre[l], ws.post[l], *upstream, ws.grad_z);
+    const Matrix& input = l == 0 ? ws.input : ws.post[l - 1];
+    if (accumulate_param_grads) {
+      weight_grad(static_cast<int>(l)).noalias() += ws.grad_z * input.transpose();
+      bias_grad(static_cast<int>(l)) += ws.grad_z.rowwise().sum();
+    }
+    if (l == 0) {
+      if (dx) {
+        ensure_shape(*dx, layers_[0].in, dy.cols());
+        dx->noalias() = weight(0).transpose() * ws.grad_z;
+      }
+    } else {
+      Matrix* next = upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0];
+      ensure_shape(*next, layers_[l].in, dy.cols());
+      next->noalias() = weight(static_cast<int>(l)).transpose() * ws.grad_z;
+      upstream = next;
+    }
+  }
+}
+
+}  // namespace pnp::nn

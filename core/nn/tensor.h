@@ -1,0 +1,22 @@
+#pragma once
+// float32 column-major matrices; a batch is stored one sample per column, so a dense
+// layer is one GEMM: Y = W X + b.
+
+#include <Eigen/Core>
+
+namespace pnp::nn {
+
+using Matrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic>;
+using Vector = Eigen::Matrix<float, Eigen::Dynamic, 1>;
+using MatrixMap = Eigen::Map<Matrix>;
+using ConstMatrixMap = Eigen::Map<const Matrix>;
+using VectorMap = Eigen::Map<Vector>;
+using ConstVectorMap = Eigen::Map<const Vector>;
+using MatrixRef = Eigen::Ref<const Matrix>;
+
+// Resizes only when the shape changes, so a steady batch size never allocates.
+inline void ensure_shape(Matrix& m, Eigen::Index rows, Eigen::Index cols) {
+  if (m.rows() != rows || m.cols() != cols) m.resize(rows, cols);
+}
+
+}  // namespace pnp::nn
