@@ -3,6 +3,7 @@
 // buffers are sized once; step() allocates nothing. One Adam can be shared by several
 // A3C workers: they apply gradients to the same parameters and statistics in turn.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -34,7 +35,7 @@ class Adam {
 
  private:
   AdamConfig config_;
-  std::vector<float> m_, v_;
+  std::vector<float, Eigen::aligned_allocator<float>> m_, v_;
   std::int64_t t_ = 0;
 };
 

@@ -4,10 +4,12 @@
 #include <string>
 
 #include "common/error.h"
+#include "nn/blas_threads.h"
 
 namespace pnp::nn {
 
 LstmCell::LstmCell(int inputs, int hidden) : inputs_(inputs), hidden_(hidden) {
+  pin_blas_to_one_thread();
   if (inputs <= 0)
     throw_invalid_argument("lstm inputs", "a positive width", std::to_string(inputs));
   if (hidden <= 0)

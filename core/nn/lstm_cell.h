@@ -46,7 +46,7 @@ class LstmCell {
 
   int inputs_, hidden_;
   std::size_t u_offset_, b_offset_;
-  std::vector<float> params_, grads_;
+  AlignedFloats params_, grads_;
   Matrix dgates_;  // scratch
 };
 

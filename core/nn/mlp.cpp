@@ -5,6 +5,8 @@
 #include <string>
 
 #include "common/error.h"
+#include "nn/blas_threads.h"
+#include "nn/gemm.h"
 
 namespace pnp::nn {
 namespace {
@@ -30,6 +32,7 @@ void validate(const MlpSpec& spec) {
 }  // namespace
 
 Mlp::Mlp(MlpSpec spec) : spec_(std::move(spec)) {
+  pin_blas_to_one_thread();
   validate(spec_);
   std::vector<int> widths{spec_.inputs};
   widths.insert(widths.end(), spec_.hidden.begin(), spec_.hidden.end());
@@ -99,8 +102,9 @@ const Matrix& Mlp::forward(const MatrixRef& x, MlpWorkspace& ws) const {
   const Matrix* a = &ws.input;
   for (std::size_t l = 0; l < n; ++l) {
     Matrix& z = ws.pre[l];
-    ensure_shape(z, layers_[l].out, x.cols());
-    z.noalias() = weight(static_cast<int>(l)) * *a;
+    const Layer& layer = layers_[l];
+    gemm(false, false, 1.0f, params_.data() + layer.weight_offset, layer.out, layer.in, a->data(),
+         a->rows(), a->cols(), 0.0f, z);
     z.colwise() += bias(static_cast<int>(l));
     apply_activation(layers_[l].activation, z, ws.post[l]);
     a = &ws.post[l];
@@ -117,21 +121,26 @@ void Mlp::backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_
   for (std::size_t l = n; l-- > 0;) {
     activation_backward(layers_[l].activation, ws.pre[l], ws.post[l], *upstream, ws.grad_z);
     const Matrix& input = l == 0 ? ws.input : ws.post[l - 1];
+    const Layer& layer = layers_[l];
+    const float* w = params_.data() + layer.weight_offset;
     if (accumulate_param_grads) {
-      weight_grad(static_cast<int>(l)).noalias() += ws.grad_z * input.transpose();
+      ensure_shape(ws.grad_w, layer.out, layer.in);
+      gemm(false, true, 1.0f, ws.grad_z.data(), ws.grad_z.rows(), ws.grad_z.cols(), input.data(),
+           input.rows(), input.cols(), 0.0f, ws.grad_w);
+      weight_grad(static_cast<int>(l)) += ws.grad_w;
       bias_grad(static_cast<int>(l)) += ws.grad_z.rowwise().sum();
     }
+    Matrix* target = nullptr;
     if (l == 0) {
-      if (dx) {
-        ensure_shape(*dx, layers_[0].in, dy.cols());
-        dx->noalias() = weight(0).transpose() * ws.grad_z;
-      }
+      target = dx;
     } else {
-      Matrix* next = upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0];
-      ensure_shape(*next, layers_[l].in, dy.cols());
-      next->noalias() = weight(static_cast<int>(l)).transpose() * ws.grad_z;
-      upstream = next;
+      target = upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0];
     }
+    if (target) {
+      gemm(true, false, 1.0f, w, layer.out, layer.in, ws.grad_z.data(), ws.grad_z.rows(),
+           ws.grad_z.cols(), 0.0f, *target);
+    }
+    if (l != 0) upstream = target;
   }
 }
 

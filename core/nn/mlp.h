@@ -31,6 +31,7 @@ struct MlpWorkspace {
   std::vector<Matrix> post;  // a_l = f(z_l)
   std::vector<Matrix> grad;  // scratch for dL/da and dL/dz
   Matrix grad_z;
+  Matrix grad_w;  // one layer's weight gradient, before accumulation
 };
 
 class Mlp {
@@ -69,8 +70,8 @@ class Mlp {
 
   MlpSpec spec_;
   std::vector<Layer> layers_;
-  std::vector<float> params_;
-  std::vector<float> grads_;
+  AlignedFloats params_;
+  AlignedFloats grads_;
 };
 
 }  // namespace pnp::nn

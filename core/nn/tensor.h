@@ -3,6 +3,7 @@
 // layer is one GEMM: Y = W X + b.
 
 #include <Eigen/Core>
+#include <vector>
 
 namespace pnp::nn {
 
@@ -13,6 +14,12 @@ using ConstMatrixMap = Eigen::Map<const Matrix>;
 using VectorMap = Eigen::Map<Vector>;
 using ConstVectorMap = Eigen::Map<const Vector>;
 using MatrixRef = Eigen::Ref<const Matrix>;
+
+// Flat parameter and gradient storage. Eigen's vectorised kernels peel a number of
+// leading elements that depends on the buffer's alignment, which changes the order of
+// floating-point sums: with the heap's arbitrary 16-byte alignment, identical runs in one
+// process gave different weights. Aligned storage makes every run bit-identical.
+using AlignedFloats = std::vector<float, Eigen::aligned_allocator<float>>;
 
 // Resizes only when the shape changes, so a steady batch size never allocates.
 inline void ensure_shape(Matrix& m, Eigen::Index rows, Eigen::Index cols) {

@@ -6,6 +6,7 @@
 #include "common/rng.h"
 #include "common/thread_pool.h"
 #include "common/validate.h"
+#include "sim/subtask_policy.h"
 #include "sim/world_model.h"
 
 namespace pnp::sim {
@@ -54,26 +55,40 @@ ScriptedEvalReport summarise(const std::vector<EpisodeOutcome>& outcomes) {
 
 }  // namespace
 
-ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
-                                     std::uint64_t seed, std::size_t threads) {
+ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& world,
+                                     const std::array<const SubtaskPolicy*, kNumSubtasks>& experts,
+                                     long long episodes, std::uint64_t seed, ThreadPool& pool) {
   require_positive(episodes, "episodes");
   const auto count = static_cast<std::size_t>(episodes);
-  const auto world = WorldModel::load(robot, object);
-  ThreadPool pool(threads);
   const std::size_t workers = std::min(pool.size(), count);
   std::vector<EpisodeOutcome> outcomes(count);
-  // Worker w runs episodes w, w + workers, ... on its own environment.
+  // Worker w runs episodes w, w + workers, ... on its own environment and policies.
   pool.parallel_for(workers, [&](std::size_t w) {
     PickPlaceEnv env(world);
+    std::array<std::unique_ptr<SubtaskPolicy>, kNumSubtasks> own;
+    SubtaskPolicies policies{};
+    for (std::size_t k = 0; k < kNumSubtasks; ++k) {
+      own[k] = experts[k]->clone();
+      policies[k] = own[k].get();
+    }
     for (std::size_t i = w; i < count; i += workers) {
-      outcomes[i] = run_scripted_episode(env, derive_seed(seed, i));
+      outcomes[i] = run_pipeline_episode(env, policies, derive_seed(seed, i));
     }
   });
   ScriptedEvalReport report = summarise(outcomes);
-  report.robot = robot;
-  report.object = object;
+  report.robot = world->robot();
+  report.object = world->object();
   report.seed = seed;
   return report;
+}
+
+ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
+                                     std::uint64_t seed, std::size_t threads) {
+  require_positive(episodes, "episodes");
+  ThreadPool pool(threads);
+  const ScriptedPolicy scripted;
+  return evaluate_pipeline(WorldModel::load(robot, object), {&scripted, &scripted, &scripted},
+                           episodes, seed, pool);
 }
 
 }  // namespace pnp::sim

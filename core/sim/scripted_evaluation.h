@@ -1,14 +1,17 @@
 #pragma once
-// Evaluates the scripted pipeline over many seeded episodes. Episode i always uses
-// derive_seed(seed, i), and results are gathered by episode index, so the report is
+// Evaluates the pipeline (scripted, or with learned experts) over many seeded episodes. Episode i
+// always uses derive_seed(seed, i), and results are gathered by episode index, so the report is
 // identical at any thread count.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "common/thread_pool.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/scripted_pipeline.h"
+#include "sim/world_model.h"
 
 namespace pnp::sim {
 
@@ -33,5 +36,11 @@ struct ScriptedEvalReport {
 // episodes and threads must be positive (threads == 0: one per hardware thread).
 ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
                                      std::uint64_t seed, std::size_t threads = 0);
+
+// The same evaluation with any experts: each worker runs its own clone of each
+// prototype. Episode i uses derive_seed(seed, i).
+ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& world,
+                                     const std::array<const SubtaskPolicy*, kNumSubtasks>& experts,
+                                     long long episodes, std::uint64_t seed, ThreadPool& pool);
 
 }  // namespace pnp::sim

@@ -4,7 +4,8 @@
 
 namespace pnp::sim {
 
-EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
+EpisodeOutcome run_pipeline_episode(PickPlaceEnv& env, const SubtaskPolicies& policies,
+                                    std::uint64_t seed) {
   EpisodeOutcome out;
   env.reset(seed);
   int stage = 0;  // index into kAllSubtasks; kNumSubtasks means idle
@@ -13,14 +14,18 @@ EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
   while (!env.needs_reset()) {
     Action action;
     Objective objective = Objective::kTask;
+    Goal goal;
     if (stage < kNumSubtasks) {
-      const Subtask subtask = kAllSubtasks[static_cast<std::size_t>(stage)];
+      const auto index = static_cast<std::size_t>(stage);
+      const Subtask subtask = kAllSubtasks[index];
       objective = objective_of(subtask);
-      action = scripted_action(subtask, env.task_state());
+      const TaskState state = env.task_state();
+      goal = sim::objective_goal(objective, state);
+      action = policies[index]->act(subtask, env.observation(), goal, state);
     } else {
       action = idle_action();
+      goal = env.episode_goal();
     }
-    const Eigen::Vector3d goal = env.objective_goal(objective);
     last = env.step(action, goal, objective);
     ++out.env_steps;
     if (last.fault != PhysicsFault::kNone) {
@@ -44,6 +49,11 @@ EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
   out.success = !out.physics_fault && last.task_success;
   out.final_distance_m = (env.task_state().object - env.episode_goal()).norm();
   return out;
+}
+
+EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
+  ScriptedPolicy scripted;
+  return run_pipeline_episode(env, {&scripted, &scripted, &scripted}, seed);
 }
 
 }  // namespace pnp::sim

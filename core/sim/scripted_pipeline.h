@@ -1,13 +1,16 @@
 #pragma once
-// Runs one episode with the three scripted experts in sequence: approach, manipulate,
+// Runs one episode with a fixed sequence of subtask experts: approach, manipulate,
 // retract, each until its termination predicate or its step cap, then idle with the
 // gripper closed until step 50. Success is read at the last step, from the object.
+// Each subtask's expert is any SubtaskPolicy: all scripted, or one learned expert with
+// scripted others (how a subtask expert is evaluated).
 
 #include <array>
 #include <cstdint>
 
 #include "sim/pick_place_env.h"
 #include "sim/subtask.h"
+#include "sim/subtask_policy.h"
 
 namespace pnp::sim {
 
@@ -21,6 +24,12 @@ struct EpisodeOutcome {
   bool physics_fault = false;
 };
 
+using SubtaskPolicies = std::array<SubtaskPolicy*, kNumSubtasks>;
+
+EpisodeOutcome run_pipeline_episode(PickPlaceEnv& env, const SubtaskPolicies& policies,
+                                    std::uint64_t seed);
+
+// All three experts scripted.
 EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed);
 
 }  // namespace pnp::sim

@@ -68,22 +68,26 @@ Eigen::Vector3d achieved_goal(Objective objective, const TaskState& s) {
 }
 
 bool is_grasped(const TaskState& s) {
-  return (s.gripper - s.object).norm() < thresholds::kGraspTolerance_m &&
-         s.finger_gap_m < s.object_width_m + thresholds::kGraspGapSlack_m;
+  return objective_done_for_goal(Objective::kManipulate, s, s.object);
 }
 
-bool objective_done(Objective objective, const TaskState& s) {
+bool objective_done_for_goal(Objective objective, const TaskState& s, const Eigen::Vector3d& goal) {
   switch (objective) {
     case Objective::kApproach:
-      return (s.gripper - objective_goal(objective, s)).norm() < thresholds::kApproachTolerance_m;
-    case Objective::kManipulate:
-      return is_grasped(s);
+      return (s.gripper - goal).norm() < thresholds::kApproachTolerance_m;
+    case Objective::kManipulate:  // the grasp predicate, centred on `goal`
+      return (s.gripper - goal).norm() < thresholds::kGraspTolerance_m &&
+             s.finger_gap_m < s.object_width_m + thresholds::kGraspGapSlack_m;
     case Objective::kRetract:
-      return (s.object - s.episode_goal).norm() < thresholds::kRetractTolerance_m;
+      return (s.object - goal).norm() < thresholds::kRetractTolerance_m;
     case Objective::kTask:
       return false;  // the whole task runs to the episode's end
   }
-  throw_internal("objective_done: unknown Objective value");
+  throw_internal("objective_done_for_goal: unknown Objective value");
+}
+
+bool objective_done(Objective objective, const TaskState& s) {
+  return objective_done_for_goal(objective, s, objective_goal(objective, s));
 }
 
 int step_cap(Subtask subtask) {

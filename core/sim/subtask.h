@@ -62,6 +62,10 @@ Objective parse_objective(std::string_view name, std::string_view field = "objec
 Eigen::Vector3d objective_goal(Objective objective, const TaskState& s);
 Eigen::Vector3d achieved_goal(Objective objective, const TaskState& s);
 bool objective_done(Objective objective, const TaskState& s);
+// The same predicate with `goal` in place of the objective's own goal: how hindsight
+// relabelling decides whether a relabelled transition is terminal. objective_done(o, s)
+// is objective_done_for_goal(o, s, objective_goal(o, s)).
+bool objective_done_for_goal(Objective objective, const TaskState& s, const Eigen::Vector3d& goal);
 int step_cap(Subtask subtask);
 
 // The object is held: gripper centred on it and the pads closed onto its sides.

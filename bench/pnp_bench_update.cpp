@@ -1,0 +1,106 @@
+// pnp-bench-update: DDPG+HER gradient updates per second (batch 256, 3 x 256 actor and
+// critic, Adam, Polyak), with the same update in PyTorch on the CPU run in the same
+// invocation as the peer (not yet: see docs/BENCHMARKS.md), and the fraction of this
+// machine's measured single-thread GEMM peak the update reaches.
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "common/rng.h"
+#include "nn/gemm.h"
+#include "rl/ddpg_her_agent.h"
+#include "tools/common/cli.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using namespace pnp;
+
+// A replay-like batch of random (but fixed) inputs.
+rl::SampledBatch random_batch(int n, Rng& rng) {
+  rl::SampledBatch b;
+  auto fill = [&](std::vector<float>& v, std::size_t size, double scale) {
+    v.resize(size);
+    for (float& x : v) x = static_cast<float>(rng.uniform(-scale, scale));
+  };
+  const auto un = static_cast<std::size_t>(n);
+  fill(b.observation, un * sim::kObservationSize, 1.0);
+  fill(b.next_observation, un * sim::kObservationSize, 1.0);
+  fill(b.goal, un * sim::kGoalSize, 1.0);
+  fill(b.action, un * sim::kActionSize, 1.0);
+  fill(b.reward, un, 0.5);
+  for (float& r : b.reward) r = -std::abs(r);
+  b.done.assign(un, 0.0f);
+  return b;
+}
+
+// FLOPs of one update: 2 x multiply-adds of every GEMM (forward 1x, backward 2x with
+// weight and input gradients, 1x when only one of them is needed).
+double update_flops(const rl::DdpgHerConfig& c) {
+  auto mlp_macs = [&](int in, int out) {
+    double macs = 0;
+    int prev = in;
+    for (int h : c.hidden) {
+      macs += static_cast<double>(prev) * h;
+      prev = h;
+    }
+    return macs + static_cast<double>(prev) * out;
+  };
+  const double actor = mlp_macs(rl::kPolicyInputs, sim::kActionSize);
+  const double critic = mlp_macs(rl::kPolicyInputs + sim::kActionSize, 1);
+  // target actor fwd + target critic fwd + critic fwd/bwd(weights) + actor fwd
+  // + critic fwd + critic bwd(inputs only) + actor bwd(weights and inputs of hidden)
+  const double macs = actor + critic + 2 * critic + actor + critic + critic + 2 * actor;
+  return 2.0 * macs * c.batch_size;
+}
+
+// The same GEMM path the update uses (single-threaded OpenBLAS), at the update's shape.
+double gemm_peak_gflops() {
+  nn::Matrix a = nn::Matrix::Random(256, 256), b = nn::Matrix::Random(256, 256), c(256, 256);
+  double best = 1e300;
+  for (int r = 0; r < 30; ++r) {
+    const auto t0 = Clock::now();
+    nn::gemm(false, false, 1.0f, a.data(), 256, 256, b.data(), 256, 256, 0.0f, c);
+    best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  volatile float sink = c(0, 0);
+  (void)sink;
+  return 2.0 * 256 * 256 * 256 / best / 1e9;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Benchmark DDPG+HER updates against PyTorch", "pnp-bench-update"};
+  int updates = 200;
+  bool json = false;
+  app.add_option("--updates", updates, "timed updates")->capture_default_str();
+  app.add_flag("--json", json);
+  return tools::run_tool(app, argc, argv, [&] {
+    rl::DdpgHerConfig config;  // batch 256, 3 x 256: the original's
+    Rng rng(1);
+    rl::DdpgHerAgent agent(config, rng);
+    const rl::SampledBatch batch = random_batch(config.batch_size, rng);
+    for (int i = 0; i < 20; ++i) agent.update(batch);  // warm-up
+    const auto t0 = Clock::now();
+    for (int i = 0; i < updates; ++i) {
+      agent.update(batch);
+      agent.update_targets();
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double ups = updates / seconds;
+    const double peak = gemm_peak_gflops();
+    const double gflops = update_flops(config) * ups / 1e9;
+    nlohmann::json out = {{"updates_per_s", ups},
+                          {"ms_per_update", 1000.0 / ups},
+                          {"update_gflop", update_flops(config) / 1e9},
+                          {"achieved_gflops", gflops},
+                          {"gemm_peak_gflops_1_thread", peak},
+                          {"fraction_of_gemm_peak", gflops / peak}};
+    std::cout << (json ? out.dump() : out.dump(2)) << "\n";
+  });
+}

@@ -1,0 +1,60 @@
+#pragma once
+// Trains the choreographer with asynchronous advantage actor-critic: W workers, each on
+// its own environment and private copy of the network, run episodes concurrently and
+// apply their gradients (policy gradient with GAE advantages, entropy bonus, value loss,
+// global-norm clipping) to the shared parameters through one shared Adam. Gradients are
+// applied in a fixed ticket order (worker w's k-th gradient is ticket k W + w) and each
+// worker then copies the shared parameters, so a run is reproducible for a given seed
+// and worker count however the threads are scheduled.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "common/thread_pool.h"
+#include "nn/adam.h"
+#include "rl/choreographer_net.h"
+#include "rl/training_progress.h"
+#include "sim/subtask_policy.h"
+#include "sim/world_model.h"
+
+namespace pnp::rl {
+
+struct A3cConfig {
+  ChoreographerSpec network;
+  int workers = 2;
+  double learning_rate = 1e-3;
+  double gamma = 0.99;  // per decision
+  double gae_lambda = 0.95;
+  double entropy_weight = 0.01;
+  double value_weight = 0.5;
+  double max_grad_norm = 40.0;
+  void validate() const;
+};
+
+struct HlcTrainingConfig {
+  std::uint64_t seed = 0;
+  A3cConfig a3c;
+  StopRule stop;
+  std::size_t eval_threads = 0;
+};
+
+struct HlcTrainingOutput {
+  TrainingResult result;
+  std::unique_ptr<ChoreographerNet> net;
+};
+
+// experts: prototypes, cloned for every worker and evaluation thread.
+HlcTrainingOutput train_choreographer(
+    const std::shared_ptr<const sim::WorldModel>& world,
+    const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
+    const HlcTrainingConfig& config, const ProgressCallback& progress = {});
+
+// Greedy evaluation of the choreographer over the experts on episodes seeded
+// derive_seed(seed, i); returns the task success rate.
+double evaluate_choreographer(
+    const std::shared_ptr<const sim::WorldModel>& world, const ChoreographerNet& net,
+    const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts, int episodes,
+    std::uint64_t seed, ThreadPool& pool, long long* env_steps);
+
+}  // namespace pnp::rl

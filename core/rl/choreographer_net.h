@@ -1,0 +1,67 @@
+#pragma once
+// The High Level Choreographer's network: normalised [observation (25); episode goal
+// (3)] -> FC 128 -> FC 128 (ELU) -> LSTM cell (32) -> policy head (3 logits: approach,
+// manipulate, retract) and value head. The whole network is trained (the original froze
+// a trunk copied from behaviour cloning). One step per decision; back-propagation
+// through the episode's decisions.
+
+#include <span>
+#include <vector>
+
+#include "common/rng.h"
+#include "nn/lstm_cell.h"
+#include "nn/mlp.h"
+#include "nn/normalizer.h"
+#include "sim/observation.h"
+#include "sim/subtask.h"
+
+namespace pnp::rl {
+
+struct ChoreographerSpec {
+  std::vector<int> trunk{128, 128};
+  int lstm = 32;
+  bool operator==(const ChoreographerSpec&) const = default;
+};
+
+struct DecisionCache {
+  nn::MlpWorkspace trunk, policy, value;
+  nn::LstmStepCache lstm;
+  nn::Matrix h;  // LSTM output after this decision
+};
+
+class ChoreographerNet {
+ public:
+  explicit ChoreographerNet(const ChoreographerSpec& spec);
+  const ChoreographerSpec& spec() const { return spec_; }
+
+  void initialise(Rng& rng);
+  void reset_state();  // zero LSTM state: start of an episode
+
+  // One decision from a normalised input column: fills logits (3) and value.
+  void step(const nn::Matrix& input, DecisionCache& cache,
+            std::array<double, sim::kNumSubtasks>& logits, double& value);
+
+  // Back-propagates through the episode: dlogits[t] (3) and dvalue[t] per decision.
+  void backward(std::vector<DecisionCache>& caches, std::span<const std::array<double, 3>> dlogits,
+                std::span<const double> dvalue);
+
+  // All parameters and gradients as one list of flat blocks, in a fixed order.
+  std::vector<std::span<float>> parameter_blocks();
+  std::vector<std::span<float>> gradient_blocks();
+  std::size_t parameter_count() const;
+  void zero_grads();
+
+  nn::Normalizer& normalizer() { return normalizer_; }
+  const nn::Normalizer& normalizer() const { return normalizer_; }
+  void normalise(const sim::Observation& observation, const sim::Goal& goal, nn::Matrix& out) const;
+
+ private:
+  ChoreographerSpec spec_;
+  nn::Mlp trunk_;
+  nn::LstmCell lstm_;
+  nn::Mlp policy_head_, value_head_;
+  nn::Normalizer normalizer_;
+  nn::Matrix h_, c_;  // recurrent state
+};
+
+}  // namespace pnp::rl

@@ -1,0 +1,96 @@
+#pragma once
+// DDPG with hindsight experience replay for one goal-conditioned expert.
+//
+// Actor:  [normalised observation (25), normalised goal (3)] -> hidden (ReLU) -> 4, tanh.
+// Critic: [normalised observation, normalised goal, action (4)] -> hidden (ReLU) -> 1.
+// Critic target r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0] (the
+// rewards are minus distances); actor loss -Q(s, pi(s)) + action_l2 * mean(pi(s)^2).
+
+#include <span>
+
+#include "common/rng.h"
+#include "nn/adam.h"
+#include "nn/mlp.h"
+#include "nn/normalizer.h"
+#include "rl/ddpg_her_config.h"
+#include "rl/segment_replay.h"
+#include "sim/observation.h"
+
+namespace pnp::rl {
+
+inline constexpr int kPolicyInputs = sim::kObservationSize + sim::kGoalSize;
+
+struct UpdateStats {
+  double critic_loss = 0;
+  double actor_loss = 0;
+  double mean_q = 0;
+};
+
+// What acting needs: the actor and the input normalisers. Copyable, so each rollout or
+// evaluation worker holds its own (the workspace is per copy).
+class ActorSnapshot {
+ public:
+  ActorSnapshot(const nn::Mlp& actor, const nn::Normalizer& obs_norm,
+                const nn::Normalizer& goal_norm, double clip_obs);
+  // Deterministic action in [-1, 1]^4.
+  sim::Action act(const sim::Observation& observation, const sim::Goal& goal);
+  const nn::Mlp& actor() const { return actor_; }
+  const nn::Normalizer& observation_normalizer() const { return obs_norm_; }
+  const nn::Normalizer& goal_normalizer() const { return goal_norm_; }
+  double clip_obs() const { return clip_obs_; }
+
+ private:
+  nn::Mlp actor_;
+  nn::Normalizer obs_norm_, goal_norm_;
+  double clip_obs_;
+  nn::Matrix input_;
+  nn::MlpWorkspace workspace_;
+};
+
+// Writes the clipped, normalised [observation; goal] into column `col` of `out`.
+void normalise_policy_input(const nn::Normalizer& obs_norm, const nn::Normalizer& goal_norm,
+                            double clip_obs, const sim::Observation& observation,
+                            const sim::Goal& goal, nn::Matrix& out, Eigen::Index col);
+
+class DdpgHerAgent {
+ public:
+  DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng);
+
+  const DdpgHerConfig& config() const { return config_; }
+  ActorSnapshot snapshot() const;
+
+  // Adds observations and goals to the normalisers' statistics, then publishes them.
+  void update_normalizers(std::span<const sim::Observation> observations,
+                          std::span<const sim::Goal> goals);
+
+  // One gradient step on the critic and the actor from a batch.
+  UpdateStats update(const SampledBatch& batch);
+  void update_targets();  // Polyak averaging
+  // One behaviour-cloning step on the actor: mean squared error to the batch's actions
+  // (for demonstrations the batch is sampled without relabelling). Returns the loss.
+  double behaviour_clone(const SampledBatch& batch);
+
+  nn::Mlp& actor() { return actor_; }
+  nn::Mlp& critic() { return critic_; }
+  const nn::Mlp& actor() const { return actor_; }
+  const nn::Mlp& critic() const { return critic_; }
+  const nn::Normalizer& observation_normalizer() const { return obs_norm_; }
+  const nn::Normalizer& goal_normalizer() const { return goal_norm_; }
+  nn::Normalizer& observation_normalizer() { return obs_norm_; }
+  nn::Normalizer& goal_normalizer() { return goal_norm_; }
+  // After restoring weights (fine-tuning from a checkpoint): targets := online.
+  void sync_targets();
+
+ private:
+  void prepare_inputs(const SampledBatch& batch);
+
+  DdpgHerConfig config_;
+  nn::Mlp actor_, critic_, actor_target_, critic_target_;
+  nn::Normalizer obs_norm_, goal_norm_;
+  nn::Adam actor_adam_, critic_adam_;
+  // Preallocated batch buffers and workspaces: a steady batch size never allocates.
+  nn::Matrix state_, next_state_, critic_in_, next_critic_in_, target_, dq_, dx_, da_;
+  nn::MlpWorkspace actor_ws_, critic_ws_, target_actor_ws_, target_critic_ws_, critic_pi_ws_;
+};
+
+}  // namespace pnp::rl

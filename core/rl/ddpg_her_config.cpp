@@ -1,0 +1,54 @@
+#include "rl/ddpg_her_config.h"
+
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+
+namespace pnp::rl {
+namespace {
+
+void require(bool ok, const char* field, const char* expected, double got) {
+  if (!ok) throw_invalid_argument(field, expected, std::to_string(got));
+}
+
+}  // namespace
+
+void DdpgHerConfig::validate() const {
+  if (hidden.empty()) throw_invalid_argument("hidden", "at least one hidden layer", "none");
+  for (std::size_t i = 0; i < hidden.size(); ++i) {
+    if (hidden[i] <= 0) {
+      throw_invalid_argument("hidden[" + std::to_string(i) + "]", "a positive width",
+                             std::to_string(hidden[i]));
+    }
+  }
+  require(actor_learning_rate > 0 && std::isfinite(actor_learning_rate), "actor_learning_rate",
+          "a positive finite number", actor_learning_rate);
+  require(critic_learning_rate > 0 && std::isfinite(critic_learning_rate), "critic_learning_rate",
+          "a positive finite number", critic_learning_rate);
+  require(gamma > 0 && gamma < 1, "gamma", "a value in (0, 1)", gamma);
+  require(polyak >= 0 && polyak < 1, "polyak", "a value in [0, 1)", polyak);
+  require(batch_size > 0, "batch_size", "a positive integer", batch_size);
+  require(buffer_size > 0, "buffer_size", "a positive integer", static_cast<double>(buffer_size));
+  if (batch_size > buffer_size) {
+    throw_invalid_argument("batch_size",
+                           "at most buffer_size (" + std::to_string(buffer_size) + ")",
+                           std::to_string(batch_size));
+  }
+  require(her_k >= 0, "her_k", "a non-negative integer", her_k);
+  require(noise_eps >= 0 && std::isfinite(noise_eps), "noise_eps", "a non-negative number",
+          noise_eps);
+  require(random_eps >= 0 && random_eps <= 1, "random_eps", "a probability in [0, 1]", random_eps);
+  require(action_l2 >= 0 && std::isfinite(action_l2), "action_l2", "a non-negative number",
+          action_l2);
+  require(clip_obs > 0, "clip_obs", "a positive number", clip_obs);
+  require(norm_clip > 0, "norm_clip", "a positive number", norm_clip);
+  require(norm_std_floor > 0, "norm_std_floor", "a positive number", norm_std_floor);
+  require(episodes_per_cycle > 0, "episodes_per_cycle", "a positive integer", episodes_per_cycle);
+  require(updates_per_cycle >= 0, "updates_per_cycle", "a non-negative integer", updates_per_cycle);
+  require(demo_episodes >= 0, "demo_episodes", "a non-negative integer", demo_episodes);
+  require(demo_pretrain_updates >= 0, "demo_pretrain_updates", "a non-negative integer",
+          demo_pretrain_updates);
+}
+
+}  // namespace pnp::rl

@@ -1,0 +1,39 @@
+#pragma once
+// Every DDPG+HER hyperparameter in one struct. Defaults are the original code's
+// (../shared/reference/original-implementation.md), except where a comment says why.
+
+#include <vector>
+
+namespace pnp::rl {
+
+struct DdpgHerConfig {
+  std::vector<int> hidden{256, 256, 256};  // actor and critic hidden widths
+  double actor_learning_rate = 1e-3;
+  double critic_learning_rate = 1e-3;
+  double gamma = 0.98;
+  double polyak = 0.95;  // target <- polyak target + (1 - polyak) online
+  int batch_size = 256;
+  long long buffer_size = 1'000'000;  // transitions
+  int her_k = 4;                      // relabelled : original goals = k : 1 ("future")
+  double noise_eps = 0.2;             // Gaussian action noise sigma
+  double random_eps = 0.3;            // probability of a uniformly random action
+  bool random_gripper = false;        // random actions include the gripper (see subtask_rollout.h)
+  double action_l2 = 1.0;             // penalty on the actor's squared motion (xyz, not gripper)
+  double clip_obs = 200.0;            // observations clipped before normalising
+  double norm_clip = 5.0;
+  double norm_std_floor = 0.01;
+  int episodes_per_cycle = 2;  // rollouts between two rounds of updates
+  int updates_per_cycle = 40;  // gradient steps per cycle; targets updated once per cycle
+  bool learn_gripper = true;   // false: the gripper command stays scripted (paper-faithful)
+  // Learning from demonstrations: before exploring, run this many scripted episodes of
+  // the subtask (their steps count as training steps), store them in the replay, and
+  // pretrain the actor on them by behaviour cloning. Without it the untrained actor's
+  // gripper command (about 0) holds nothing, and retract never keeps hold of the object.
+  int demo_episodes = 10;
+  int demo_pretrain_updates = 300;
+
+  // Throws INVALID_ARGUMENT naming the field and the expected value.
+  void validate() const;
+};
+
+}  // namespace pnp::rl

@@ -1,0 +1,49 @@
+#pragma once
+// A subtask expert (or end-to-end policy) on disk: its metadata as JSON, the actor, the
+// critic (so fine-tuning can start from it), and the normalisers' statistics, in the
+// checksummed container of nn/checkpoint_io.h.
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "nn/mlp.h"
+#include "nn/normalizer.h"
+#include "rl/ddpg_her_agent.h"
+
+namespace pnp::rl {
+
+struct ExpertMeta {
+  std::string role;       // approach, manipulate, retract or e2e
+  std::string algorithm;  // ddpg_her or bc
+  std::string robot, object;
+  std::vector<int> hidden;
+  bool learn_gripper = true;
+  double clip_obs = 200, norm_clip = 5, norm_std_floor = 0.01;
+  long long train_env_steps = 0;
+  double eval_success = 0;
+  std::uint64_t seed = 0;
+  std::string code_commit;
+};
+
+struct LoadedExpert {
+  ExpertMeta meta;
+  nn::Mlp actor;
+  std::optional<nn::Mlp> critic;
+  nn::Normalizer observation_normalizer, goal_normalizer;
+};
+
+std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& actor,
+                                      const nn::Mlp* critic, const nn::Normalizer& obs_norm,
+                                      const nn::Normalizer& goal_norm);
+// Throws DATA_LOSS for a corrupted or truncated file, INVALID_ARGUMENT for a file that
+// is intact but describes something else (e.g. wrong network widths).
+LoadedExpert load_expert(std::span<const std::uint8_t> bytes);
+
+// Restores weights and normaliser statistics into an agent of matching shape (for
+// fine-tuning with --init). Throws INVALID_ARGUMENT naming the mismatch.
+void restore_agent(DdpgHerAgent& agent, const LoadedExpert& expert);
+
+}  // namespace pnp::rl

@@ -1,0 +1,66 @@
+#include "rl/hlc_episode.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pnp::rl {
+namespace {
+
+std::array<double, sim::kNumSubtasks> softmax(const std::array<double, sim::kNumSubtasks>& logits) {
+  const double top = *std::max_element(logits.begin(), logits.end());
+  std::array<double, sim::kNumSubtasks> p{};
+  double sum = 0;
+  for (std::size_t k = 0; k < p.size(); ++k) sum += p[k] = std::exp(logits[k] - top);
+  for (double& v : p) v /= sum;
+  return p;
+}
+
+int choose(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng) {
+  if (!sample) return static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());
+  double u = rng.uniform();
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if ((u -= p[k]) < 0) return static_cast<int>(k);
+  }
+  return static_cast<int>(p.size()) - 1;
+}
+
+}  // namespace
+
+HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
+                           const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
+                           std::uint64_t episode_seed, bool sample, Rng& choice_rng) {
+  HlcEpisode out;
+  env.reset(episode_seed);
+  net.reset_state();
+  nn::Matrix input;
+  sim::StepResult last;
+  while (!env.needs_reset()) {
+    HlcDecision d;
+    out.observations.push_back(env.observation());
+    net.normalise(env.observation(), env.episode_goal(), input);
+    std::array<double, sim::kNumSubtasks> logits{};
+    out.caches.emplace_back();
+    net.step(input, out.caches.back(), logits, d.value);
+    d.probabilities = softmax(logits);
+    d.choice = choose(d.probabilities, sample, choice_rng);
+    const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
+    const sim::Objective objective = sim::objective_of(subtask);
+    for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {
+      const sim::TaskState state = env.task_state();
+      const sim::Goal goal = sim::objective_goal(objective, state);
+      const sim::Action a =
+          experts[static_cast<std::size_t>(d.choice)]->act(subtask, env.observation(), goal, state);
+      last = env.step(a, goal, objective);
+      ++d.steps;
+      ++out.env_steps;
+      if (last.objective_done || last.fault != sim::PhysicsFault::kNone) break;
+    }
+    out.decisions.push_back(d);
+    if (last.fault != sim::PhysicsFault::kNone) break;
+  }
+  out.success = last.fault == sim::PhysicsFault::kNone && last.task_success;
+  if (!out.decisions.empty()) out.decisions.back().reward = out.success ? 1.0 : 0.0;
+  return out;
+}
+
+}  // namespace pnp::rl

@@ -1,0 +1,40 @@
+#pragma once
+// One episode driven by the choreographer: at each decision it picks a subtask, whose
+// expert runs until its termination predicate fires (after at least one step), its step
+// cap, or the episode's end; then it decides again, until step 50. Any subtask may be
+// picked at any decision. Sparse reward: +1 at the last decision if the task succeeded
+// (object within 0.05 m of the goal at step 50), 0 otherwise.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "common/rng.h"
+#include "rl/choreographer_net.h"
+#include "sim/pick_place_env.h"
+#include "sim/subtask_policy.h"
+
+namespace pnp::rl {
+
+struct HlcDecision {
+  int choice = 0;
+  std::array<double, sim::kNumSubtasks> probabilities{};
+  double value = 0;
+  double reward = 0;
+  int steps = 0;  // environment steps the chosen expert ran
+};
+
+struct HlcEpisode {
+  std::vector<HlcDecision> decisions;
+  std::vector<DecisionCache> caches;           // for back-propagation (training only)
+  std::vector<sim::Observation> observations;  // the decision inputs, for the normaliser
+  bool success = false;
+  int env_steps = 0;
+};
+
+// sample: draw choices from the policy (training); otherwise take the most probable.
+HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
+                           const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
+                           std::uint64_t episode_seed, bool sample, Rng& choice_rng);
+
+}  // namespace pnp::rl

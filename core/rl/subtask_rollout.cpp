@@ -1,0 +1,63 @@
+#include "rl/subtask_rollout.h"
+
+#include "sim/scripted_expert.h"
+
+namespace pnp::rl {
+
+sim::Action explore(const sim::Action& action, const ExplorationNoise& noise, Rng& rng) {
+  // The uniformly random action replaces the motion (xyz) only, unless random_gripper:
+  // a random gripper command opens the fingers half the time and drops a carried
+  // object, which made every retract episode a drop (measured: 0-6% task success after
+  // 10k steps, against 99% at 4k with the same motion exploration and a scripted gripper).
+  const bool random = rng.uniform() < noise.random_probability;
+  sim::Action out;
+  for (int k = 0; k < sim::kActionSize; ++k) {
+    const bool uniform = random && (k < 3 || noise.random_gripper);
+    out(k) = uniform ? rng.uniform(-1.0, 1.0) : action(k) + noise.gaussian_sigma * rng.normal();
+  }
+  return out.cwiseMax(-1.0).cwiseMin(1.0);
+}
+
+SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
+                                   sim::SubtaskPolicy& expert, const ExplorationNoise* noise,
+                                   std::uint64_t episode_seed, Rng& noise_rng) {
+  SubtaskEpisode out;
+  env.reset(episode_seed);
+  // Prefix: the scripted experts of the subtasks before this one.
+  for (sim::Subtask before : sim::kAllSubtasks) {
+    if (before == subtask) break;
+    const sim::Objective objective = sim::objective_of(before);
+    for (int t = 0; t < sim::step_cap(before) && !env.needs_reset(); ++t) {
+      const sim::TaskState state = env.task_state();
+      const auto r = env.step(sim::scripted_action(before, state),
+                              sim::objective_goal(objective, state), objective);
+      ++out.prefix_steps;
+      if (r.objective_done || r.fault != sim::PhysicsFault::kNone) break;
+    }
+  }
+  out.env_steps = out.prefix_steps;
+  const sim::Objective objective = sim::objective_of(subtask);
+  for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {
+    const sim::TaskState state = env.task_state();
+    const sim::Goal goal = sim::objective_goal(objective, state);
+    const sim::Observation observation = env.observation();
+    sim::Action action = expert.act(subtask, observation, goal, state);
+    if (noise) {
+      const double gripper = action(3);
+      action = explore(action, *noise, noise_rng);
+      // A gripper the expert does not learn stays exactly as commanded.
+      if (!noise->explore_gripper) action(3) = gripper;
+    }
+    const sim::StepResult r = env.step(action, goal, objective);
+    ++out.env_steps;
+    if (r.fault != sim::PhysicsFault::kNone) break;  // the transition is not physical: drop it
+    out.segment.push_back({observation, action, goal, r.observation});
+    if (r.objective_done) {
+      out.subtask_done = true;
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace pnp::rl

@@ -1,0 +1,171 @@
+#include "rl/subtask_trainer.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "rl/learned_expert.h"
+#include "rl/seed_streams.h"
+#include "rl/subtask_rollout.h"
+#include "sim/scripted_evaluation.h"
+
+namespace pnp::rl {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Observations and goals of a new segment, for the normalisers: the goals acted on and
+// the achieved goals hindsight relabelling will substitute.
+void update_normalizers(DdpgHerAgent& agent, const std::vector<Transition>& segment,
+                        sim::Objective objective, double object_width_m) {
+  if (segment.empty()) return;
+  std::vector<sim::Observation> observations;
+  std::vector<sim::Goal> goals;
+  for (const Transition& tr : segment) {
+    observations.push_back(tr.observation);
+    goals.push_back(tr.goal);
+    goals.push_back(sim::achieved_goal(
+        objective, sim::TaskState::from(tr.next_observation, tr.goal, object_width_m)));
+  }
+  agent.update_normalizers(observations, goals);
+}
+
+}  // namespace
+
+SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
+                                           const SubtaskTrainingConfig& config,
+                                           const ProgressCallback& progress) {
+  config.ddpg.validate();
+  config.stop.validate();
+  const auto start = Clock::now();
+  Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
+  auto agent = std::make_unique<DdpgHerAgent>(config.ddpg, init_rng);
+  if (config.init) restore_agent(*agent, *config.init);
+  const sim::Objective objective = sim::objective_of(config.subtask);
+  const double object_width = 2 * world->object_spec().half_width_m;
+  SegmentReplay replay(config.ddpg.buffer_size, objective, object_width);
+  Rng sample_rng(stream_seed(config.seed, Stream::kReplaySampling));
+  ThreadPool pool(config.threads);
+
+  const auto episodes_per_cycle = static_cast<std::size_t>(config.ddpg.episodes_per_cycle);
+  std::vector<sim::PickPlaceEnv> envs;
+  for (std::size_t i = 0; i < episodes_per_cycle; ++i) envs.emplace_back(world);
+  const ExplorationNoise noise{config.ddpg.noise_eps, config.ddpg.random_eps,
+                               config.ddpg.random_gripper, config.ddpg.learn_gripper};
+  const double future_p = future_probability(config.ddpg.her_k);
+  const std::uint64_t episode_stream = stream_seed(config.seed, Stream::kTrainingEpisodes);
+  const std::uint64_t noise_stream = stream_seed(config.seed, Stream::kExploration);
+  const std::uint64_t eval_stream = stream_seed(config.seed, Stream::kEvaluation);
+
+  TrainingResult result;
+  StopTracker stop(config.stop);
+  SampledBatch batch;
+  std::vector<SubtaskEpisode> episodes(episodes_per_cycle);
+  long long next_eval = config.stop.eval_interval_steps;
+  double loss_sum_critic = 0, loss_sum_actor = 0;
+  long long updates = 0, updates_since_eval = 0;
+  const sim::ScriptedPolicy scripted;
+
+  // Demonstrations: scripted episodes of this subtask, counted as training episodes,
+  // stored in the replay, and cloned into the actor before exploration starts.
+  if (config.ddpg.demo_episodes > 0 && !config.init) {
+    const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
+    std::vector<SubtaskEpisode> demo(demos);
+    pool.parallel_for(demos, [&](std::size_t i) {
+      sim::PickPlaceEnv env(world);
+      sim::ScriptedPolicy teacher;
+      Rng unused(0);
+      demo[i] = run_subtask_episode(env, config.subtask, teacher, nullptr,
+                                    derive_seed(episode_stream, i), unused);
+    });
+    SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
+    for (const SubtaskEpisode& e : demo) {
+      replay.add_segment(e.segment);
+      demo_replay.add_segment(e.segment);
+      update_normalizers(*agent, e.segment, objective, object_width);
+      result.train_env_steps += e.env_steps;
+      ++result.train_episodes;
+    }
+    for (int u = 0; u < config.ddpg.demo_pretrain_updates && demo_replay.size() > 0; ++u) {
+      demo_replay.sample(config.ddpg.batch_size, 0.0, sample_rng, batch);
+      agent->behaviour_clone(batch);
+    }
+    agent->sync_targets();
+  }
+
+  for (;;) {
+    // Rollouts: one episode per environment, in parallel; each episode's environment
+    // and noise seeds depend only on its index, so any thread count gives the same data.
+    const LearnedExpert learner(agent->snapshot(), config.ddpg.learn_gripper);
+    const long long first_episode = result.train_episodes;
+    pool.parallel_for(episodes_per_cycle, [&](std::size_t i) {
+      const auto own = learner.clone();
+      const auto index = static_cast<std::uint64_t>(first_episode) + i;
+      Rng noise_rng(derive_seed(noise_stream, index));
+      episodes[i] = run_subtask_episode(envs[i], config.subtask, *own, &noise,
+                                        derive_seed(episode_stream, index), noise_rng);
+    });
+    for (const SubtaskEpisode& e : episodes) {
+      replay.add_segment(e.segment);
+      update_normalizers(*agent, e.segment, objective, object_width);
+      result.train_env_steps += e.env_steps;
+      ++result.train_episodes;
+    }
+    // Updates.
+    if (replay.size() > 0) {
+      for (int u = 0; u < config.ddpg.updates_per_cycle; ++u) {
+        replay.sample(config.ddpg.batch_size, future_p, sample_rng, batch);
+        const UpdateStats s = agent->update(batch);
+        loss_sum_critic += s.critic_loss;
+        loss_sum_actor += s.actor_loss;
+        ++updates;
+        ++updates_since_eval;
+      }
+      agent->update_targets();
+    }
+    if (result.train_env_steps < next_eval) continue;
+
+    // Evaluation on the fixed, fresh evaluation episodes.
+    const auto eval_start = Clock::now();
+    const LearnedExpert learned(agent->snapshot(), config.ddpg.learn_gripper);
+    std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> experts{&scripted, &scripted,
+                                                                     &scripted};
+    experts[static_cast<std::size_t>(config.subtask)] = &learned;
+    const auto report =
+        sim::evaluate_pipeline(world, experts, config.stop.eval_episodes, eval_stream, pool);
+    result.eval_env_steps += report.env_steps;
+    result.eval_wall_s += seconds_since(eval_start);
+    CurvePoint point;
+    point.env_steps = result.train_env_steps;
+    point.episodes = result.train_episodes;
+    point.wall_s = seconds_since(start);
+    point.task_success = report.success_rate;
+    point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];
+    point.critic_loss =
+        updates_since_eval ? loss_sum_critic / static_cast<double>(updates_since_eval) : 0;
+    point.actor_loss =
+        updates_since_eval ? loss_sum_actor / static_cast<double>(updates_since_eval) : 0;
+    point.updates = updates;
+    loss_sum_critic = loss_sum_actor = 0;
+    updates_since_eval = 0;
+    while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
+    // Approach and manipulate must also do their own subtask: the scripted experts after
+    // them can recover from a poor one (a manipulate that never closes is rescued by the
+    // retract closing the gripper), so task success alone would credit an expert that
+    // only runs out its step cap. Nothing follows retract, and its predicate is a
+    // stricter tolerance (0.01 m) of what task success measures (0.05 m).
+    const double score = config.subtask == sim::Subtask::kRetract
+                             ? point.task_success
+                             : std::min(point.task_success, point.subtask_success);
+    const bool done = stop.record(point, score, result);
+    if (progress) progress(point);
+    if (done) break;
+  }
+  result.wall_s = seconds_since(start);
+  return {std::move(result), std::move(agent)};
+}
+
+}  // namespace pnp::rl

@@ -1,0 +1,38 @@
+#pragma once
+// Trains one subtask expert with DDPG+HER: cycles of parallel exploratory episodes (the
+// prefix scripted), stored as segments, followed by gradient updates; at every
+// evaluation interval the expert is evaluated on fresh seeded episodes with scripted
+// experts for the other subtasks (never counted as training steps), until the target is
+// reached twice in a row or the step cap.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "common/thread_pool.h"
+#include "rl/ddpg_her_agent.h"
+#include "rl/expert_checkpoint.h"
+#include "rl/training_progress.h"
+#include "sim/world_model.h"
+
+namespace pnp::rl {
+
+struct SubtaskTrainingConfig {
+  sim::Subtask subtask = sim::Subtask::kApproach;
+  std::uint64_t seed = 0;
+  DdpgHerConfig ddpg;
+  StopRule stop;
+  std::size_t threads = 0;
+  const LoadedExpert* init = nullptr;  // fine-tune from this checkpoint
+};
+
+struct SubtaskTrainingOutput {
+  TrainingResult result;
+  std::unique_ptr<DdpgHerAgent> agent;
+};
+
+SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
+                                           const SubtaskTrainingConfig& config,
+                                           const ProgressCallback& progress = {});
+
+}  // namespace pnp::rl

@@ -1,0 +1,42 @@
+#include "rl/training_progress.h"
+
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+
+namespace pnp::rl {
+
+void StopRule::validate() const {
+  if (max_steps <= 0)
+    throw_invalid_argument("max_steps", "a positive integer", std::to_string(max_steps));
+  if (!(target_success > 0 && target_success <= 1)) {
+    throw_invalid_argument("target_success", "a value in (0, 1]", std::to_string(target_success));
+  }
+  if (eval_interval_steps <= 0) {
+    throw_invalid_argument("eval_interval_steps", "a positive integer",
+                           std::to_string(eval_interval_steps));
+  }
+  if (eval_episodes <= 0)
+    throw_invalid_argument("eval_episodes", "a positive integer", std::to_string(eval_episodes));
+  if (consecutive <= 0)
+    throw_invalid_argument("consecutive", "a positive integer", std::to_string(consecutive));
+}
+
+bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& result) {
+  result.curve.push_back(point);
+  result.final_success = point.task_success;
+  if (score >= rule_.target_success) {
+    if (streak_++ == 0) streak_start_ = point.env_steps;
+  } else {
+    streak_ = 0;
+  }
+  if (streak_ >= rule_.consecutive) {
+    result.reached = true;
+    result.steps_to_target = streak_start_;
+    return true;
+  }
+  return point.env_steps >= rule_.max_steps;
+}
+
+}  // namespace pnp::rl

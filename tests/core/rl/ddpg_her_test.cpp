@@ -1,0 +1,150 @@
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+#include "rl/ddpg_her_agent.h"
+#include "rl/expert_checkpoint.h"
+#include "rl/subtask_trainer.h"
+
+namespace pnp::rl {
+namespace {
+
+std::string refusal(const DdpgHerConfig& c) {
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
+  DdpgHerConfig c;
+  EXPECT_EQ(refusal(c), "accepted");
+  c.actor_learning_rate = -1e-3;
+  EXPECT_EQ(refusal(c), "actor_learning_rate: expected a positive finite number, got -0.001000");
+  c = {};
+  c.batch_size = 512;
+  c.buffer_size = 256;
+  EXPECT_EQ(refusal(c), "batch_size: expected at most buffer_size (256), got 512");
+  c = {};
+  c.gamma = 1.0;
+  EXPECT_EQ(refusal(c), "gamma: expected a value in (0, 1), got 1.000000");
+  c = {};
+  c.hidden = {256, 0};
+  EXPECT_EQ(refusal(c), "hidden[1]: expected a positive width, got 0");
+}
+
+TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
+  DdpgHerConfig config;
+  config.hidden = {32, 32};
+  Rng rng(5);
+  DdpgHerAgent agent(config, rng);
+  std::vector<sim::Observation> obs{sim::Observation::Constant(0.3),
+                                    sim::Observation::Constant(-0.2)};
+  std::vector<sim::Goal> goals{sim::Goal(1, 0.7, 0.5), sim::Goal(1.2, 0.8, 0.4)};
+  agent.update_normalizers(obs, goals);
+  ExpertMeta meta{"retract", "ddpg_her", "fetch", "block", config.hidden, true, 200, 5,
+                  0.01,      1000,       0.9,     5,       "test"};
+  const auto bytes = save_expert(meta, agent.actor(), &agent.critic(),
+                                 agent.observation_normalizer(), agent.goal_normalizer());
+  const LoadedExpert loaded = load_expert(bytes);
+  EXPECT_EQ(loaded.meta.role, "retract");
+  EXPECT_EQ(loaded.meta.hidden, config.hidden);
+  ActorSnapshot original = agent.snapshot();
+  ActorSnapshot restored(loaded.actor, loaded.observation_normalizer, loaded.goal_normalizer,
+                         loaded.meta.clip_obs);
+  const sim::Observation o = sim::Observation::Constant(0.1);
+  EXPECT_EQ(original.act(o, goals[0]), restored.act(o, goals[0]));
+  auto corrupted = bytes;
+  corrupted[corrupted.size() / 2] ^= 1;
+  try {
+    load_expert(corrupted);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
+  }
+}
+
+TEST(DdpgHer, BehaviourCloningFitsTheDemonstratedActions) {
+  DdpgHerConfig config;
+  config.hidden = {64, 64};
+  config.batch_size = 32;
+  Rng rng(3);
+  DdpgHerAgent agent(config, rng);
+  SegmentReplay replay(1000, sim::Objective::kRetract, 0.05);
+  std::vector<Transition> demo;
+  for (int t = 0; t < 20; ++t) {
+    Transition tr;
+    tr.observation = sim::Observation::Constant(0.01 * t);
+    tr.next_observation = tr.observation;
+    tr.goal = sim::Goal(1.3, 0.7, 0.5);
+    tr.action = sim::Action(0.5, -0.5, 0.1 * (t % 3), -1.0);
+    demo.push_back(tr);
+  }
+  replay.add_segment(demo);
+  SampledBatch batch;
+  Rng sample_rng(4);
+  replay.sample(32, 0.0, sample_rng, batch);
+  const double first = agent.behaviour_clone(batch);
+  double last = first;
+  for (int i = 0; i < 300; ++i) {
+    replay.sample(32, 0.0, sample_rng, batch);
+    last = agent.behaviour_clone(batch);
+  }
+  EXPECT_LT(last, first * 0.1);
+}
+
+// A fast, fixed-seed version of subtask expert training: the approach expert reaches at
+// least 90% subtask (and task) success within a small budget.
+TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
+  SubtaskTrainingConfig config;
+  config.subtask = sim::Subtask::kApproach;
+  config.seed = 7;
+  config.ddpg.hidden = {64, 64};
+  config.ddpg.updates_per_cycle = 20;
+  config.ddpg.demo_episodes = 0;  // learn from exploration alone
+  config.stop.max_steps = 4000;
+  config.stop.eval_interval_steps = 500;
+  config.stop.eval_episodes = 30;
+  config.stop.target_success = 0.9;
+  config.threads = 2;
+  const auto out = train_subtask_expert(
+      sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock), config);
+  ASSERT_FALSE(out.result.curve.empty());
+  EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
+  EXPECT_GE(out.result.curve.back().subtask_success, 0.9);
+  EXPECT_GT(out.result.eval_env_steps, 0);
+  EXPECT_LE(out.result.steps_to_target, out.result.train_env_steps);
+}
+
+TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
+  auto run = [](std::size_t threads) {
+    SubtaskTrainingConfig config;
+    config.subtask = sim::Subtask::kManipulate;
+    config.seed = 3;
+    config.ddpg.hidden = {32};
+    config.ddpg.updates_per_cycle = 5;
+    config.ddpg.batch_size = 32;
+    config.ddpg.demo_episodes = 2;
+    config.ddpg.demo_pretrain_updates = 10;
+    config.stop.max_steps = 300;
+    config.stop.eval_interval_steps = 150;
+    config.stop.eval_episodes = 6;
+    config.threads = threads;
+    return train_subtask_expert(sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock),
+                                config);
+  };
+  const auto a = run(1), b = run(3);
+  ASSERT_EQ(a.result.curve.size(), b.result.curve.size());
+  for (std::size_t i = 0; i < a.result.curve.size(); ++i) {
+    EXPECT_EQ(a.result.curve[i].env_steps, b.result.curve[i].env_steps);
+    EXPECT_EQ(a.result.curve[i].task_success, b.result.curve[i].task_success);
+    EXPECT_EQ(a.result.curve[i].critic_loss, b.result.curve[i].critic_loss);
+  }
+  EXPECT_TRUE(std::equal(a.agent->actor().params().begin(), a.agent->actor().params().end(),
+                         b.agent->actor().params().begin()));
+}
+
+}  // namespace
+}  // namespace pnp::rl
