@@ -60,6 +60,8 @@ void add_ddpg_options(CLI::App& app, Options& o) {
                  "scripted demonstrations before exploring (counted)")
       ->capture_default_str();
   app.add_option("--demo-pretrain-updates", o.ddpg.demo_pretrain_updates)->capture_default_str();
+  app.add_option("--demo-bc-weight", o.ddpg.demo_bc_weight, "behaviour-cloning weight on demonstrations")
+      ->capture_default_str();
 }
 
 void write_outputs(const Options& o, const std::vector<std::uint8_t>& checkpoint,
@@ -84,6 +86,9 @@ nlohmann::json train_expert(const Options& o) {
     }
   }
   rl::SubtaskTrainingConfig config;
+  config.algorithm = o.algo == "bc"           ? rl::ExpertAlgorithm::kBcOnline
+                     : o.algo == "bc_offline" ? rl::ExpertAlgorithm::kBcOffline
+                                              : rl::ExpertAlgorithm::kDdpgHer;
   config.subtask = subtask;
   config.seed = o.seed;
   config.ddpg = o.ddpg;
@@ -197,7 +202,7 @@ int main(int argc, char** argv) {
   Options o;
   app.add_option("--role", o.role, "approach, manipulate, retract, hlc or e2e")
       ->capture_default_str();
-  app.add_option("--algo", o.algo, "ddpg_her, bc or a3c")->capture_default_str();
+  app.add_option("--algo", o.algo, "ddpg_her, bc (online, DAgger-style), bc_offline or a3c")->capture_default_str();
   app.add_option("--robot", o.robot)->capture_default_str();
   app.add_option("--object", o.object)->capture_default_str();
   app.add_option("--seed", o.seed)->capture_default_str();

@@ -93,21 +93,40 @@ void DdpgHerAgent::update_normalizers(std::span<const sim::Observation> observat
   goal_norm_.refresh();
 }
 
-void DdpgHerAgent::prepare_inputs(const SampledBatch& batch) {
+void DdpgHerAgent::normalise_states(const SampledBatch& batch, nn::Matrix& states) const {
   const auto n = static_cast<Eigen::Index>(batch.reward.size());
-  nn::ensure_shape(state_, kPolicyInputs, n);
-  nn::ensure_shape(next_state_, kPolicyInputs, n);
+  nn::ensure_shape(states, kPolicyInputs, n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const auto io = static_cast<std::size_t>(i * kObs), ig = static_cast<std::size_t>(i * kGoal);
-    normalise_rows(obs_norm_, config_.clip_obs, batch.observation.data() + io, state_, 0, i);
-    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + ig, state_, kObs, i);
-    normalise_rows(obs_norm_, config_.clip_obs, batch.next_observation.data() + io, next_state_, 0,
-                   i);
-    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + ig, next_state_, kObs, i);
+    normalise_rows(obs_norm_, config_.clip_obs, batch.observation.data() + i * kObs, states, 0, i);
+    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + i * kGoal, states, kObs, i);
   }
 }
 
-UpdateStats DdpgHerAgent::update(const SampledBatch& batch) {
+void DdpgHerAgent::prepare_inputs(const SampledBatch& batch) {
+  normalise_states(batch, state_);
+  const auto n = static_cast<Eigen::Index>(batch.reward.size());
+  nn::ensure_shape(next_state_, kPolicyInputs, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    normalise_rows(obs_norm_, config_.clip_obs, batch.next_observation.data() + i * kObs, next_state_, 0, i);
+    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + i * kGoal, next_state_, kObs, i);
+  }
+}
+
+double DdpgHerAgent::accumulate_bc_gradient(const SampledBatch& demos, float weight) {
+  normalise_states(demos, demo_state_);
+  const auto n = demo_state_.cols();
+  const nn::Matrix& pi = actor_.forward(demo_state_, demo_ws_);
+  nn::ensure_shape(demo_da_, kAct, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int a = 0; a < kAct; ++a) demo_da_(a, i) = pi(a, i) - demos.action[static_cast<std::size_t>(i * kAct + a)];
+  }
+  const double loss = static_cast<double>(demo_da_.squaredNorm()) / static_cast<double>(demo_da_.size());
+  demo_da_ *= 2.0f * weight / static_cast<float>(demo_da_.size());
+  actor_.backward(demo_ws_, demo_da_, true, nullptr);
+  return loss;
+}
+
+UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* demos) {
   prepare_inputs(batch);
   const auto n = state_.cols();
   const float inv_n = 1.0f / static_cast<float>(n);
@@ -160,23 +179,16 @@ UpdateStats DdpgHerAgent::update(const SampledBatch& batch) {
   da_.topRows(3) += motion * (2.0f * l2 / motion_size);
   actor_.zero_grads();
   actor_.backward(actor_ws_, da_, true, nullptr);
+  if (demos && config_.demo_bc_weight > 0) {
+    stats.bc_loss = accumulate_bc_gradient(*demos, static_cast<float>(config_.demo_bc_weight));
+  }
   actor_adam_.step(actor_.params(), actor_.grads());
   return stats;
 }
 
 double DdpgHerAgent::behaviour_clone(const SampledBatch& batch) {
-  prepare_inputs(batch);
-  const auto n = state_.cols();
-  const nn::Matrix& pi = actor_.forward(state_, actor_ws_);
-  nn::ensure_shape(da_, kAct, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (int a = 0; a < kAct; ++a)
-      da_(a, i) = pi(a, i) - batch.action[static_cast<std::size_t>(i * kAct + a)];
-  }
-  const double loss = static_cast<double>(da_.squaredNorm()) / static_cast<double>(da_.size());
-  da_ *= 2.0f / static_cast<float>(da_.size());
   actor_.zero_grads();
-  actor_.backward(actor_ws_, da_, true, nullptr);
+  const double loss = accumulate_bc_gradient(batch, 1.0f);
   actor_adam_.step(actor_.params(), actor_.grads());
   return loss;
 }

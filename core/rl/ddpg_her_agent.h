@@ -24,6 +24,7 @@ struct UpdateStats {
   double critic_loss = 0;
   double actor_loss = 0;
   double mean_q = 0;
+  double bc_loss = 0;
 };
 
 // What acting needs: the actor and the input normalisers. Copyable, so each rollout or
@@ -63,8 +64,10 @@ class DdpgHerAgent {
   void update_normalizers(std::span<const sim::Observation> observations,
                           std::span<const sim::Goal> goals);
 
-  // One gradient step on the critic and the actor from a batch.
-  UpdateStats update(const SampledBatch& batch);
+  // One gradient step on the critic and the actor from a batch. With `demos`, the
+  // actor's loss also has demo_bc_weight x the mean squared error to the demonstrated
+  // actions on that batch.
+  UpdateStats update(const SampledBatch& batch, const SampledBatch* demos = nullptr);
   void update_targets();  // Polyak averaging
   // One behaviour-cloning step on the actor: mean squared error to the batch's actions
   // (for demonstrations the batch is sampled without relabelling). Returns the loss.
@@ -83,14 +86,17 @@ class DdpgHerAgent {
 
  private:
   void prepare_inputs(const SampledBatch& batch);
+  void normalise_states(const SampledBatch& batch, nn::Matrix& states) const;
+  // Adds the behaviour-cloning gradient on `demos` to the actor's gradients.
+  double accumulate_bc_gradient(const SampledBatch& demos, float weight);
 
   DdpgHerConfig config_;
   nn::Mlp actor_, critic_, actor_target_, critic_target_;
   nn::Normalizer obs_norm_, goal_norm_;
   nn::Adam actor_adam_, critic_adam_;
   // Preallocated batch buffers and workspaces: a steady batch size never allocates.
-  nn::Matrix state_, next_state_, critic_in_, next_critic_in_, target_, dq_, dx_, da_;
-  nn::MlpWorkspace actor_ws_, critic_ws_, target_actor_ws_, target_critic_ws_, critic_pi_ws_;
+  nn::Matrix state_, next_state_, critic_in_, next_critic_in_, target_, dq_, dx_, da_, demo_state_, demo_da_;
+  nn::MlpWorkspace actor_ws_, critic_ws_, target_actor_ws_, target_critic_ws_, critic_pi_ws_, demo_ws_;
 };
 
 }  // namespace pnp::rl

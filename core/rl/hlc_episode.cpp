@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/scripted_expert.h"
+
 namespace pnp::rl {
 namespace {
 
@@ -57,6 +59,16 @@ HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
     }
     out.decisions.push_back(d);
     if (last.fault != sim::PhysicsFault::kNone) break;
+    // Once retract has placed the object, the arm idles with the gripper closed until
+    // step 50 (the paper's protocol): further decisions could only hold or undo it, and
+    // ~30 one-step "hold" decisions buried the three that matter.
+    if (subtask == sim::Subtask::kRetract && last.objective_done) {
+      while (!env.needs_reset()) {
+        last = env.step(sim::idle_action(), env.episode_goal(), sim::Objective::kTask);
+        ++out.env_steps;
+        if (last.fault != sim::PhysicsFault::kNone) break;
+      }
+    }
   }
   out.success = last.fault == sim::PhysicsFault::kNone && last.task_success;
   if (!out.decisions.empty()) out.decisions.back().reward = out.success ? 1.0 : 0.0;

@@ -6,6 +6,7 @@
 #include "rl/learned_expert.h"
 #include "rl/seed_streams.h"
 #include "rl/subtask_rollout.h"
+#include "sim/scripted_expert.h"
 #include "sim/scripted_evaluation.h"
 
 namespace pnp::rl {
@@ -31,6 +32,14 @@ void update_normalizers(DdpgHerAgent& agent, const std::vector<Transition>& segm
         objective, sim::TaskState::from(tr.next_observation, tr.goal, object_width_m)));
   }
   agent.update_normalizers(observations, goals);
+}
+
+// DAgger labelling: the action stored for each visited state is the scripted expert's.
+void label_with_teacher(std::vector<Transition>& segment, sim::Subtask subtask, double object_width_m) {
+  for (Transition& tr : segment) {
+    // For retract the goal acted on is the episode goal; the other experts ignore it.
+    tr.action = sim::scripted_action(subtask, sim::TaskState::from(tr.observation, tr.goal, object_width_m));
+  }
 }
 
 }  // namespace
@@ -70,8 +79,12 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   const sim::ScriptedPolicy scripted;
 
   // Demonstrations: scripted episodes of this subtask, counted as training episodes,
-  // stored in the replay, and cloned into the actor before exploration starts.
-  if (config.ddpg.demo_episodes > 0 && !config.init) {
+  // stored in the replay, cloned into the actor before exploration starts, and kept as a
+  // behaviour-cloning term in every actor update.
+  const bool ddpg = config.algorithm == ExpertAlgorithm::kDdpgHer;
+  SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
+  SampledBatch demo_batch;
+  if (ddpg && config.ddpg.demo_episodes > 0 && !config.init) {
     const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
     std::vector<SubtaskEpisode> demo(demos);
     pool.parallel_for(demos, [&](std::size_t i) {
@@ -81,7 +94,6 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
       demo[i] = run_subtask_episode(env, config.subtask, teacher, nullptr,
                                     derive_seed(episode_stream, i), unused);
     });
-    SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
     for (const SubtaskEpisode& e : demo) {
       replay.add_segment(e.segment);
       demo_replay.add_segment(e.segment);
@@ -101,12 +113,18 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     // and noise seeds depend only on its index, so any thread count gives the same data.
     const LearnedExpert learner(agent->snapshot(), config.ddpg.learn_gripper);
     const long long first_episode = result.train_episodes;
+    const bool offline = config.algorithm == ExpertAlgorithm::kBcOffline;
     pool.parallel_for(episodes_per_cycle, [&](std::size_t i) {
+      sim::ScriptedPolicy teacher;
       const auto own = learner.clone();
+      sim::SubtaskPolicy& actor = offline ? static_cast<sim::SubtaskPolicy&>(teacher) : *own;
       const auto index = static_cast<std::uint64_t>(first_episode) + i;
       Rng noise_rng(derive_seed(noise_stream, index));
-      episodes[i] = run_subtask_episode(envs[i], config.subtask, *own, &noise,
+      episodes[i] = run_subtask_episode(envs[i], config.subtask, actor, offline ? nullptr : &noise,
                                         derive_seed(episode_stream, index), noise_rng);
+      if (config.algorithm == ExpertAlgorithm::kBcOnline) {
+        label_with_teacher(episodes[i].segment, config.subtask, object_width);
+      }
     });
     for (const SubtaskEpisode& e : episodes) {
       replay.add_segment(e.segment);
@@ -117,14 +135,23 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     // Updates.
     if (replay.size() > 0) {
       for (int u = 0; u < config.ddpg.updates_per_cycle; ++u) {
+        if (!ddpg) {  // behaviour cloning: regress the actor on the labelled actions
+          replay.sample(config.ddpg.batch_size, 0.0, sample_rng, batch);
+          loss_sum_actor += agent->behaviour_clone(batch);
+          ++updates;
+          ++updates_since_eval;
+          continue;
+        }
         replay.sample(config.ddpg.batch_size, future_p, sample_rng, batch);
-        const UpdateStats s = agent->update(batch);
+        const bool with_demos = demo_replay.size() > 0 && config.ddpg.demo_bc_weight > 0;
+        if (with_demos) demo_replay.sample(config.ddpg.demo_batch_size, 0.0, sample_rng, demo_batch);
+        const UpdateStats s = agent->update(batch, with_demos ? &demo_batch : nullptr);
         loss_sum_critic += s.critic_loss;
         loss_sum_actor += s.actor_loss;
         ++updates;
         ++updates_since_eval;
       }
-      agent->update_targets();
+      if (ddpg) agent->update_targets();
     }
     if (result.train_env_steps < next_eval) continue;
 

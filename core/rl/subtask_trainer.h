@@ -17,7 +17,15 @@
 
 namespace pnp::rl {
 
+enum class ExpertAlgorithm {
+  kDdpgHer,    // DDPG + HER (with demonstrations, see DdpgHerConfig)
+  kBcOnline,   // behaviour cloning, DAgger-style: the learner acts (with noise), every
+               // visited state is labelled with the scripted expert's action
+  kBcOffline,  // behaviour cloning on scripted demonstrations only
+};
+
 struct SubtaskTrainingConfig {
+  ExpertAlgorithm algorithm = ExpertAlgorithm::kDdpgHer;
   sim::Subtask subtask = sim::Subtask::kApproach;
   std::uint64_t seed = 0;
   DdpgHerConfig ddpg;

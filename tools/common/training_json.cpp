@@ -47,7 +47,9 @@ nlohmann::json ddpg_config_json(const rl::DdpgHerConfig& c) {
           {"updates_per_cycle", c.updates_per_cycle},
           {"learn_gripper", c.learn_gripper},
           {"demo_episodes", c.demo_episodes},
-          {"demo_pretrain_updates", c.demo_pretrain_updates}};
+          {"demo_pretrain_updates", c.demo_pretrain_updates},
+          {"demo_bc_weight", c.demo_bc_weight},
+          {"demo_batch_size", c.demo_batch_size}};
 }
 
 void print_progress(std::FILE* out, const std::string& role, const rl::CurvePoint& p) {
