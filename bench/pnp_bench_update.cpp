@@ -1,7 +1,8 @@
 // pnp-bench-update: DDPG+HER gradient updates per second (batch 256, 3 x 256 actor and
 // critic, Adam, Polyak), with the same update in PyTorch on the CPU run in the same
-// invocation as the peer (not yet: see docs/BENCHMARKS.md), and the fraction of this
-// machine's measured single-thread GEMM peak the update reaches.
+// invocation as the peer (bench/torch_ddpg_update.py, Debian's python3-torch on
+// OpenBLAS, best of 1 and 2 threads), and the fraction of this machine's measured
+// single-thread GEMM peak the update reaches.
 
 #include <chrono>
 #include <cstdio>
@@ -72,14 +73,40 @@ double gemm_peak_gflops() {
   return 2.0 * 256 * 256 * 256 / best / 1e9;
 }
 
+// Runs the PyTorch peer and returns its JSON, or an object with an "error".
+nlohmann::json run_torch_peer(const std::string& python, const std::string& script, int updates) {
+  const std::string command = python + " " + script + " " + std::to_string(updates) + " 2>&1";
+  std::FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return {{"error", "could not start " + python}};
+  std::string output;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof(buffer), pipe)) output += buffer;
+  const int status = pclose(pipe);
+  // The peer's result is its last line.
+  while (!output.empty() && output.back() == '\n') output.pop_back();
+  const std::string last =
+      output.substr(output.rfind('\n') == std::string::npos ? 0 : output.rfind('\n') + 1);
+  if (status != 0 || last.empty() || last.front() != '{') {
+    return {
+        {"error",
+         "the PyTorch peer failed (install python3-torch: scripts/install-bench-deps): " + output}};
+  }
+  return nlohmann::json::parse(last);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark DDPG+HER updates against PyTorch", "pnp-bench-update"};
   int updates = 200;
-  bool json = false;
+  bool json = false, skip_torch = false;
+  std::string python = "/usr/bin/python3", script = PNP_TORCH_PEER_SCRIPT;
   app.add_option("--updates", updates, "timed updates")->capture_default_str();
   app.add_flag("--json", json);
+  app.add_flag("--no-torch", skip_torch, "skip the PyTorch peer");
+  app.add_option("--python", python, "interpreter with Debian's python3-torch")
+      ->capture_default_str();
+  app.add_option("--torch-script", script)->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     rl::DdpgHerConfig config;  // batch 256, 3 x 256: the original's
     Rng rng(1);
@@ -100,7 +127,17 @@ int main(int argc, char** argv) {
                           {"update_gflop", update_flops(config) / 1e9},
                           {"achieved_gflops", gflops},
                           {"gemm_peak_gflops_1_thread", peak},
-                          {"fraction_of_gemm_peak", gflops / peak}};
+                          {"update_threads", rl::kUpdatePartitions},
+                          // The update runs its two batch halves on two cores.
+                          {"fraction_of_gemm_peak", gflops / (peak * rl::kUpdatePartitions)}};
+    if (!skip_torch) {
+      const nlohmann::json torch = run_torch_peer(python, script, updates);
+      out["torch"] = torch;
+      if (torch.contains("updates_per_s")) {
+        out["torch_updates_per_s"] = torch["updates_per_s"];
+        out["ratio"] = ups / torch["updates_per_s"].get<double>();
+      }
+    }
     std::cout << (json ? out.dump() : out.dump(2)) << "\n";
   });
 }

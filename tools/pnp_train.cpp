@@ -60,7 +60,8 @@ void add_ddpg_options(CLI::App& app, Options& o) {
                  "scripted demonstrations before exploring (counted)")
       ->capture_default_str();
   app.add_option("--demo-pretrain-updates", o.ddpg.demo_pretrain_updates)->capture_default_str();
-  app.add_option("--demo-bc-weight", o.ddpg.demo_bc_weight, "behaviour-cloning weight on demonstrations")
+  app.add_option("--demo-bc-weight", o.ddpg.demo_bc_weight,
+                 "behaviour-cloning weight on demonstrations")
       ->capture_default_str();
 }
 
@@ -74,7 +75,8 @@ void write_outputs(const Options& o, const std::vector<std::uint8_t>& checkpoint
 }
 
 nlohmann::json train_expert(const Options& o) {
-  const auto subtask = sim::parse_subtask(o.role, "--role");
+  const bool end_to_end = o.role == "e2e";
+  const auto subtask = end_to_end ? sim::Subtask::kRetract : sim::parse_subtask(o.role, "--role");
   const auto robot = sim::parse_robot(o.robot, "--robot");
   const auto object = sim::parse_object(o.object, "--object");
   const auto world = sim::WorldModel::load(robot, object);
@@ -86,13 +88,15 @@ nlohmann::json train_expert(const Options& o) {
     }
   }
   rl::SubtaskTrainingConfig config;
-  config.algorithm = o.algo == "bc"           ? rl::ExpertAlgorithm::kBcOnline
+  config.algorithm = end_to_end               ? rl::ExpertAlgorithm::kEndToEnd
+                     : o.algo == "bc"         ? rl::ExpertAlgorithm::kBcOnline
                      : o.algo == "bc_offline" ? rl::ExpertAlgorithm::kBcOffline
                                               : rl::ExpertAlgorithm::kDdpgHer;
   config.subtask = subtask;
   config.seed = o.seed;
   config.ddpg = o.ddpg;
-  config.ddpg.learn_gripper = !o.scripted_gripper;
+  config.ddpg.learn_gripper = !o.scripted_gripper || end_to_end;
+  if (end_to_end) config.ddpg.random_gripper = true;  // the standard end-to-end setup
   config.stop = o.stop;
   config.threads = o.threads;
   config.init = init ? &*init : nullptr;
@@ -202,7 +206,8 @@ int main(int argc, char** argv) {
   Options o;
   app.add_option("--role", o.role, "approach, manipulate, retract, hlc or e2e")
       ->capture_default_str();
-  app.add_option("--algo", o.algo, "ddpg_her, bc (online, DAgger-style), bc_offline or a3c")->capture_default_str();
+  app.add_option("--algo", o.algo, "ddpg_her, bc (online, DAgger-style), bc_offline or a3c")
+      ->capture_default_str();
   app.add_option("--robot", o.robot)->capture_default_str();
   app.add_option("--object", o.object)->capture_default_str();
   app.add_option("--seed", o.seed)->capture_default_str();
@@ -228,7 +233,12 @@ int main(int argc, char** argv) {
   app.add_option("--entropy", o.a3c.entropy_weight)->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     nlohmann::json summary;
-    if (o.role == "approach" || o.role == "manipulate" || o.role == "retract") {
+    if (o.role == "e2e") {
+      if (o.algo != "ddpg_her")
+        throw_invalid_argument("--algo", "ddpg_her for the end-to-end baseline",
+                               "\"" + o.algo + "\"");
+      summary = train_expert(o);
+    } else if (o.role == "approach" || o.role == "manipulate" || o.role == "retract") {
       if (o.algo != "ddpg_her") {
         throw_invalid_argument("--algo", "ddpg_her for a subtask expert in this build",
                                "\"" + o.algo + "\"");

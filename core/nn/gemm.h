@@ -1,9 +1,9 @@
 #pragma once
 // C = alpha op(A) op(B) + beta C for column-major float matrices. Batched products (the
-// DDPG update's 256-column GEMMs) go to single-threaded OpenBLAS, about 1.8x Eigen's own
-// kernel here; narrow ones (one sample when acting) stay in Eigen. OpenBLAS is only
-// reached from the thread that trains: its pthread build is not safe to call from the
-// rollout and evaluation threads at the same time (measured: runs stopped reproducing).
+// DDPG update's 128-column partitions) go to OpenBLAS pinned to one thread, about 1.8x
+// Eigen's own kernel here; narrow ones (one sample when acting) stay in Eigen, which is
+// faster at that size. The update's two partitions call OpenBLAS from two threads at
+// once; the reproducibility tests cover that.
 
 #include "nn/tensor.h"
 

@@ -113,6 +113,11 @@ const Matrix& Mlp::forward(const MatrixRef& x, MlpWorkspace& ws) const {
 }
 
 void Mlp::backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_grads, Matrix* dx) {
+  backward_into(ws, dy, accumulate_param_grads ? std::span<float>(grads_) : std::span<float>(), dx);
+}
+
+void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> grads_out,
+                        Matrix* dx) const {
   const auto n = layers_.size();
   ws.grad.resize(2);
   Matrix* upstream = &ws.grad[0];
@@ -123,19 +128,13 @@ void Mlp::backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_
     const Matrix& input = l == 0 ? ws.input : ws.post[l - 1];
     const Layer& layer = layers_[l];
     const float* w = params_.data() + layer.weight_offset;
-    if (accumulate_param_grads) {
-      ensure_shape(ws.grad_w, layer.out, layer.in);
+    if (!grads_out.empty()) {
       gemm(false, true, 1.0f, ws.grad_z.data(), ws.grad_z.rows(), ws.grad_z.cols(), input.data(),
            input.rows(), input.cols(), 0.0f, ws.grad_w);
-      weight_grad(static_cast<int>(l)) += ws.grad_w;
-      bias_grad(static_cast<int>(l)) += ws.grad_z.rowwise().sum();
+      MatrixMap(grads_out.data() + layer.weight_offset, layer.out, layer.in) += ws.grad_w;
+      VectorMap(grads_out.data() + layer.bias_offset, layer.out) += ws.grad_z.rowwise().sum();
     }
-    Matrix* target = nullptr;
-    if (l == 0) {
-      target = dx;
-    } else {
-      target = upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0];
-    }
+    Matrix* target = l == 0 ? dx : (upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0]);
     if (target) {
       gemm(true, false, 1.0f, w, layer.out, layer.in, ws.grad_z.data(), ws.grad_z.rows(),
            ws.grad_z.cols(), 0.0f, *target);

@@ -55,6 +55,10 @@ class Mlp {
   // After forward() with the same workspace: adds dL/dparams to grads() when
   // accumulate_param_grads, and writes dL/dx to *dx when dx is not null.
   void backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_grads, Matrix* dx);
+  // The same, adding dL/dparams into `grads_out` (same layout as grads(); empty: none),
+  // so that several threads can back-propagate through one network at once.
+  void backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> grads_out,
+                     Matrix* dx) const;
 
   ConstMatrixMap weight(int layer) const;
   ConstVectorMap bias(int layer) const;

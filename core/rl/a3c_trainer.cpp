@@ -236,6 +236,7 @@ HlcTrainingOutput train_choreographer(
           point.episodes = result.train_episodes;
           point.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
           point.updates = ticket + 1;
+          point.eval_wall_s = result.eval_wall_s;
           while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
           const bool finished = stop.record(point, point.task_success, result);
           if (progress) progress(point);

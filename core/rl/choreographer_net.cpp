@@ -5,7 +5,8 @@
 namespace pnp::rl {
 namespace {
 
-constexpr int kInputs = sim::kObservationSize + sim::kGoalSize;
+constexpr int kNormalised = sim::kObservationSize + sim::kGoalSize;
+constexpr int kInputs = kNormalised + sim::kNumSubtasks;
 
 }  // namespace
 
@@ -16,7 +17,7 @@ ChoreographerNet::ChoreographerNet(const ChoreographerSpec& spec)
       lstm_(spec.trunk.back(), spec.lstm),
       policy_head_({spec.lstm, {}, sim::kNumSubtasks}),
       value_head_({spec.lstm, {}, 1}),
-      normalizer_(kInputs, 5.0, 0.01) {
+      normalizer_(kNormalised, 5.0, 0.01) {
   reset_state();
 }
 
@@ -34,13 +35,17 @@ void ChoreographerNet::reset_state() {
   c_ = nn::Matrix::Zero(spec_.lstm, 1);
 }
 
-void ChoreographerNet::normalise(const sim::Observation& observation, const sim::Goal& goal,
-                                 nn::Matrix& out) const {
-  double raw[kInputs];
+void ChoreographerNet::encode(const sim::Observation& observation, const sim::Goal& goal,
+                              const sim::TaskState& state, nn::Matrix& out) const {
+  double raw[kNormalised];
   for (int k = 0; k < sim::kObservationSize; ++k) raw[k] = observation(k);
   for (int k = 0; k < sim::kGoalSize; ++k) raw[sim::kObservationSize + k] = goal(k);
   nn::ensure_shape(out, kInputs, 1);
   normalizer_.normalize_into(raw, out, 0, 0);
+  for (sim::Subtask s : sim::kAllSubtasks) {
+    out(kNormalised + static_cast<int>(s), 0) =
+        sim::objective_done(sim::objective_of(s), state) ? 1.0f : 0.0f;
+  }
 }
 
 void ChoreographerNet::step(const nn::Matrix& input, DecisionCache& cache,

@@ -33,6 +33,14 @@ void normalise_rows(const nn::Normalizer& norm, double clip_raw, const float* ra
 
 }  // namespace
 
+struct DdpgHerAgent::Partition {
+  Eigen::Index begin = 0, count = 0;
+  nn::Matrix state, next_state, critic_in, next_critic_in, target, dq, dx, da, demo_state, demo_da;
+  nn::MlpWorkspace actor_ws, critic_ws, target_actor_ws, target_critic_ws, critic_pi_ws, demo_ws;
+  nn::AlignedFloats actor_grads, critic_grads;
+  double critic_loss = 0, q_sum = 0, motion_sq = 0, bc_sq = 0;
+};
+
 void normalise_policy_input(const nn::Normalizer& obs_norm, const nn::Normalizer& goal_norm,
                             double clip_obs, const sim::Observation& observation,
                             const sim::Goal& goal, nn::Matrix& out, Eigen::Index col) {
@@ -67,11 +75,19 @@ DdpgHerAgent::DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng)
       obs_norm_(kObs, config_.norm_clip, config_.norm_std_floor),
       goal_norm_(kGoal, config_.norm_clip, config_.norm_std_floor),
       actor_adam_(actor_.params().size(), {config_.actor_learning_rate}),
-      critic_adam_(critic_.params().size(), {config_.critic_learning_rate}) {
+      critic_adam_(critic_.params().size(), {config_.critic_learning_rate}),
+      pool_(static_cast<std::size_t>(kUpdatePartitions)) {
   actor_.initialise(init_rng);
   critic_.initialise(init_rng);
   sync_targets();
+  parts_.resize(kUpdatePartitions);
+  for (Partition& p : parts_) {
+    p.actor_grads.assign(actor_.params().size(), 0.0f);
+    p.critic_grads.assign(critic_.params().size(), 0.0f);
+  }
 }
+
+DdpgHerAgent::~DdpgHerAgent() = default;
 
 void DdpgHerAgent::sync_targets() {
   nn::copy_into(actor_target_.params(), actor_.params());
@@ -93,104 +109,160 @@ void DdpgHerAgent::update_normalizers(std::span<const sim::Observation> observat
   goal_norm_.refresh();
 }
 
-void DdpgHerAgent::normalise_states(const SampledBatch& batch, nn::Matrix& states) const {
-  const auto n = static_cast<Eigen::Index>(batch.reward.size());
-  nn::ensure_shape(states, kPolicyInputs, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    normalise_rows(obs_norm_, config_.clip_obs, batch.observation.data() + i * kObs, states, 0, i);
-    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + i * kGoal, states, kObs, i);
+namespace {
+
+// Column range of partition p of n samples.
+std::pair<Eigen::Index, Eigen::Index> columns(int p, Eigen::Index n) {
+  const Eigen::Index begin = n * p / kUpdatePartitions, end = n * (p + 1) / kUpdatePartitions;
+  return {begin, end - begin};
+}
+
+}  // namespace
+
+void DdpgHerAgent::normalise_columns(const std::vector<float>& observations,
+                                     const std::vector<float>& goals, Eigen::Index begin,
+                                     Eigen::Index count, nn::Matrix& states) const {
+  nn::ensure_shape(states, kPolicyInputs, count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    normalise_rows(obs_norm_, config_.clip_obs, observations.data() + (begin + i) * kObs, states, 0,
+                   i);
+    normalise_rows(goal_norm_, config_.clip_obs, goals.data() + (begin + i) * kGoal, states, kObs,
+                   i);
   }
 }
 
-void DdpgHerAgent::prepare_inputs(const SampledBatch& batch) {
-  normalise_states(batch, state_);
-  const auto n = static_cast<Eigen::Index>(batch.reward.size());
-  nn::ensure_shape(next_state_, kPolicyInputs, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    normalise_rows(obs_norm_, config_.clip_obs, batch.next_observation.data() + i * kObs, next_state_, 0, i);
-    normalise_rows(goal_norm_, config_.clip_obs, batch.goal.data() + i * kGoal, next_state_, kObs, i);
+void DdpgHerAgent::critic_gradient(const SampledBatch& batch, Eigen::Index total,
+                                   Partition& p) const {
+  normalise_columns(batch.observation, batch.goal, p.begin, p.count, p.state);
+  normalise_columns(batch.next_observation, batch.goal, p.begin, p.count, p.next_state);
+  // Target: r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0].
+  const nn::Matrix& next_action = actor_target_.forward(p.next_state, p.target_actor_ws);
+  nn::ensure_shape(p.next_critic_in, kPolicyInputs + kAct, p.count);
+  p.next_critic_in.topRows(kPolicyInputs) = p.next_state;
+  p.next_critic_in.bottomRows(kAct) = next_action;
+  const nn::Matrix& next_q = critic_target_.forward(p.next_critic_in, p.target_critic_ws);
+  nn::ensure_shape(p.target, 1, p.count);
+  const auto gamma = static_cast<float>(config_.gamma);
+  const auto clip_return = static_cast<float>(-1.0 / (1.0 - config_.gamma));
+  for (Eigen::Index i = 0; i < p.count; ++i) {
+    const auto k = static_cast<std::size_t>(p.begin + i);
+    p.target(0, i) = std::clamp(batch.reward[k] + gamma * (1.0f - batch.done[k]) * next_q(0, i),
+                                clip_return, 0.0f);
   }
+  // Critic: mean squared error over the whole batch.
+  nn::ensure_shape(p.critic_in, kPolicyInputs + kAct, p.count);
+  p.critic_in.topRows(kPolicyInputs) = p.state;
+  for (Eigen::Index i = 0; i < p.count; ++i) {
+    for (int a = 0; a < kAct; ++a) {
+      p.critic_in(kPolicyInputs + a, i) =
+          batch.action[static_cast<std::size_t>((p.begin + i) * kAct + a)];
+    }
+  }
+  const nn::Matrix& q = critic_.forward(p.critic_in, p.critic_ws);
+  p.dq = (q - p.target) * (2.0f / static_cast<float>(total));
+  p.critic_loss = static_cast<double>((q - p.target).squaredNorm());
+  std::fill(p.critic_grads.begin(), p.critic_grads.end(), 0.0f);
+  critic_.backward_into(p.critic_ws, p.dq, p.critic_grads, nullptr);
 }
 
-double DdpgHerAgent::accumulate_bc_gradient(const SampledBatch& demos, float weight) {
-  normalise_states(demos, demo_state_);
-  const auto n = demo_state_.cols();
-  const nn::Matrix& pi = actor_.forward(demo_state_, demo_ws_);
-  nn::ensure_shape(demo_da_, kAct, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (int a = 0; a < kAct; ++a) demo_da_(a, i) = pi(a, i) - demos.action[static_cast<std::size_t>(i * kAct + a)];
+void DdpgHerAgent::actor_gradient(Eigen::Index total, Partition& p) const {
+  // Maximise Q(s, pi(s)). The L2 penalty applies to the motion (xyz) only: a held grasp
+  // needs a gripper command near -1, and penalising it trained the actor to let go
+  // (measured: retract with a learned gripper stayed under 10% task success).
+  const nn::Matrix& pi = actor_.forward(p.state, p.actor_ws);
+  p.critic_in.bottomRows(kAct) = pi;
+  const nn::Matrix& q_pi = critic_.forward(p.critic_in, p.critic_pi_ws);
+  p.q_sum = static_cast<double>(q_pi.sum());
+  const auto motion = pi.topRows(3);
+  p.motion_sq = static_cast<double>(motion.squaredNorm());
+  const auto l2 = static_cast<float>(config_.action_l2);
+  const auto motion_size = static_cast<float>(3 * total);
+  p.dq.setConstant(1, p.count, -1.0f / static_cast<float>(total));
+  critic_.backward_into(p.critic_pi_ws, p.dq, {}, &p.dx);  // dQ/d(input) only
+  p.da = p.dx.bottomRows(kAct);
+  p.da.topRows(3) += motion * (2.0f * l2 / motion_size);
+  std::fill(p.actor_grads.begin(), p.actor_grads.end(), 0.0f);
+  actor_.backward_into(p.actor_ws, p.da, p.actor_grads, nullptr);
+}
+
+double DdpgHerAgent::bc_gradient(const SampledBatch& demos, Eigen::Index begin, Eigen::Index count,
+                                 Eigen::Index total, float weight, Partition& p) const {
+  normalise_columns(demos.observation, demos.goal, begin, count, p.demo_state);
+  const nn::Matrix& pi = actor_.forward(p.demo_state, p.demo_ws);
+  nn::ensure_shape(p.demo_da, kAct, count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    for (int a = 0; a < kAct; ++a) {
+      p.demo_da(a, i) = pi(a, i) - demos.action[static_cast<std::size_t>((begin + i) * kAct + a)];
+    }
   }
-  const double loss = static_cast<double>(demo_da_.squaredNorm()) / static_cast<double>(demo_da_.size());
-  demo_da_ *= 2.0f * weight / static_cast<float>(demo_da_.size());
-  actor_.backward(demo_ws_, demo_da_, true, nullptr);
-  return loss;
+  const double squared_error = static_cast<double>(p.demo_da.squaredNorm());
+  p.demo_da *= 2.0f * weight / static_cast<float>(total * kAct);
+  actor_.backward_into(p.demo_ws, p.demo_da, p.actor_grads, nullptr);
+  return squared_error;
+}
+
+void DdpgHerAgent::sum_gradients(nn::Mlp& net, bool actor) {
+  auto grads = net.grads();
+  std::fill(grads.begin(), grads.end(), 0.0f);
+  for (const Partition& p : parts_) {  // fixed order: the sum never depends on timing
+    const auto& g = actor ? p.actor_grads : p.critic_grads;
+    for (std::size_t k = 0; k < grads.size(); ++k) grads[k] += g[k];
+  }
 }
 
 UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* demos) {
-  prepare_inputs(batch);
-  const auto n = state_.cols();
-  const float inv_n = 1.0f / static_cast<float>(n);
-  UpdateStats stats;
+  const auto n = static_cast<Eigen::Index>(batch.reward.size());
+  const bool with_demos = demos && config_.demo_bc_weight > 0;
+  const auto demo_n = with_demos ? static_cast<Eigen::Index>(demos->reward.size()) : 0;
+  for (int k = 0; k < kUpdatePartitions; ++k)
+    std::tie(parts_[static_cast<std::size_t>(k)].begin, parts_[static_cast<std::size_t>(k)].count) =
+        columns(k, n);
 
-  // Critic target: r + gamma (1 - done) Q'(s', pi'(s')), clamped.
-  const nn::Matrix& next_action = actor_target_.forward(next_state_, target_actor_ws_);
-  nn::ensure_shape(next_critic_in_, kPolicyInputs + kAct, n);
-  next_critic_in_.topRows(kPolicyInputs) = next_state_;
-  next_critic_in_.bottomRows(kAct) = next_action;
-  const nn::Matrix& next_q = critic_target_.forward(next_critic_in_, target_critic_ws_);
-  nn::ensure_shape(target_, 1, n);
-  const auto gamma = static_cast<float>(config_.gamma);
-  const auto clip_return = static_cast<float>(-1.0 / (1.0 - config_.gamma));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const float y = batch.reward[k] + gamma * (1.0f - batch.done[k]) * next_q(0, i);
-    target_(0, i) = std::clamp(y, clip_return, 0.0f);
-  }
-
-  // Critic: mean squared error to the target.
-  nn::ensure_shape(critic_in_, kPolicyInputs + kAct, n);
-  critic_in_.topRows(kPolicyInputs) = state_;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (int a = 0; a < kAct; ++a)
-      critic_in_(kPolicyInputs + a, i) = batch.action[static_cast<std::size_t>(i * kAct + a)];
-  }
-  const nn::Matrix& q = critic_.forward(critic_in_, critic_ws_);
-  dq_ = (q - target_) * (2.0f * inv_n);
-  stats.critic_loss = static_cast<double>((q - target_).squaredNorm() * inv_n);
-  critic_.zero_grads();
-  critic_.backward(critic_ws_, dq_, true, nullptr);
+  pool_.parallel_for(parts_.size(), [&](std::size_t k) { critic_gradient(batch, n, parts_[k]); });
+  sum_gradients(critic_, false);
   critic_adam_.step(critic_.params(), critic_.grads());
 
-  // Actor: maximise Q(s, pi(s)) with an L2 penalty on the actions.
-  const nn::Matrix& pi = actor_.forward(state_, actor_ws_);
-  critic_in_.bottomRows(kAct) = pi;
-  const nn::Matrix& q_pi = critic_.forward(critic_in_, critic_pi_ws_);
-  stats.mean_q = static_cast<double>(q_pi.mean());
-  // The L2 penalty applies to the motion (xyz) only: a held grasp needs a gripper
-  // command near -1, and penalising it trained the actor to let go (measured: retract
-  // with a learned gripper stayed under 10% task success).
-  const auto l2 = static_cast<float>(config_.action_l2);
-  const auto motion = pi.topRows(3);
-  const auto motion_size = static_cast<float>(motion.size());
-  stats.actor_loss = static_cast<double>(-q_pi.mean() + l2 * motion.squaredNorm() / motion_size);
-  dq_.setConstant(1, n, -inv_n);
-  critic_.backward(critic_pi_ws_, dq_, false, &dx_);  // dQ/d(input); the critic's grads untouched
-  da_ = dx_.bottomRows(kAct);
-  da_.topRows(3) += motion * (2.0f * l2 / motion_size);
-  actor_.zero_grads();
-  actor_.backward(actor_ws_, da_, true, nullptr);
-  if (demos && config_.demo_bc_weight > 0) {
-    stats.bc_loss = accumulate_bc_gradient(*demos, static_cast<float>(config_.demo_bc_weight));
-  }
+  pool_.parallel_for(parts_.size(), [&](std::size_t k) {
+    Partition& p = parts_[k];
+    actor_gradient(n, p);
+    p.bc_sq = 0;
+    if (with_demos) {
+      const auto [begin, count] = columns(static_cast<int>(k), demo_n);
+      p.bc_sq =
+          bc_gradient(*demos, begin, count, demo_n, static_cast<float>(config_.demo_bc_weight), p);
+    }
+  });
+  sum_gradients(actor_, true);
   actor_adam_.step(actor_.params(), actor_.grads());
+
+  UpdateStats stats;
+  double q = 0, motion = 0, bc = 0;
+  for (const Partition& p : parts_) {
+    stats.critic_loss += p.critic_loss;
+    q += p.q_sum;
+    motion += p.motion_sq;
+    bc += p.bc_sq;
+  }
+  stats.critic_loss /= static_cast<double>(n);
+  stats.mean_q = q / static_cast<double>(n);
+  stats.actor_loss = -stats.mean_q + config_.action_l2 * motion / static_cast<double>(3 * n);
+  if (with_demos) stats.bc_loss = bc / static_cast<double>(demo_n * kAct);
   return stats;
 }
 
 double DdpgHerAgent::behaviour_clone(const SampledBatch& batch) {
-  actor_.zero_grads();
-  const double loss = accumulate_bc_gradient(batch, 1.0f);
+  const auto n = static_cast<Eigen::Index>(batch.reward.size());
+  pool_.parallel_for(parts_.size(), [&](std::size_t k) {
+    Partition& p = parts_[k];
+    std::fill(p.actor_grads.begin(), p.actor_grads.end(), 0.0f);
+    const auto [begin, count] = columns(static_cast<int>(k), n);
+    p.bc_sq = bc_gradient(batch, begin, count, n, 1.0f, p);
+  });
+  sum_gradients(actor_, true);
   actor_adam_.step(actor_.params(), actor_.grads());
-  return loss;
+  double squared = 0;
+  for (const Partition& p : parts_) squared += p.bc_sq;
+  return squared / static_cast<double>(n * kAct);
 }
 
 void DdpgHerAgent::update_targets() {

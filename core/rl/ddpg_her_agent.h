@@ -9,6 +9,7 @@
 #include <span>
 
 #include "common/rng.h"
+#include "common/thread_pool.h"
 #include "nn/adam.h"
 #include "nn/mlp.h"
 #include "nn/normalizer.h"
@@ -53,9 +54,17 @@ void normalise_policy_input(const nn::Normalizer& obs_norm, const nn::Normalizer
                             double clip_obs, const sim::Observation& observation,
                             const sim::Goal& goal, nn::Matrix& out, Eigen::Index col);
 
+// The update splits each batch into this many fixed column ranges, back-propagated in
+// parallel and summed in a fixed order: the result is the same whatever the number of
+// threads (with one, the ranges run in turn).
+inline constexpr int kUpdatePartitions = 2;
+
 class DdpgHerAgent {
  public:
   DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng);
+  ~DdpgHerAgent();
+  DdpgHerAgent(const DdpgHerAgent&) = delete;
+  DdpgHerAgent& operator=(const DdpgHerAgent&) = delete;
 
   const DdpgHerConfig& config() const { return config_; }
   ActorSnapshot snapshot() const;
@@ -85,18 +94,26 @@ class DdpgHerAgent {
   void sync_targets();
 
  private:
-  void prepare_inputs(const SampledBatch& batch);
-  void normalise_states(const SampledBatch& batch, nn::Matrix& states) const;
-  // Adds the behaviour-cloning gradient on `demos` to the actor's gradients.
-  double accumulate_bc_gradient(const SampledBatch& demos, float weight);
+  struct Partition;
+  // Normalised [observation; goal] of columns [begin, begin + count) of a batch.
+  void normalise_columns(const std::vector<float>& observations, const std::vector<float>& goals,
+                         Eigen::Index begin, Eigen::Index count, nn::Matrix& states) const;
+  void critic_gradient(const SampledBatch& batch, Eigen::Index total, Partition& p) const;
+  void actor_gradient(Eigen::Index total, Partition& p) const;
+  // Adds weight x the BC gradient of columns [begin, begin + count) of `demos` (mean over
+  // `total` samples) to p.actor_grads; returns that part's squared-error sum.
+  double bc_gradient(const SampledBatch& demos, Eigen::Index begin, Eigen::Index count,
+                     Eigen::Index total, float weight, Partition& p) const;
+  // Sums the partitions' gradients in a fixed order into `net`'s gradient buffer.
+  void sum_gradients(nn::Mlp& net, bool actor);
 
   DdpgHerConfig config_;
   nn::Mlp actor_, critic_, actor_target_, critic_target_;
   nn::Normalizer obs_norm_, goal_norm_;
   nn::Adam actor_adam_, critic_adam_;
-  // Preallocated batch buffers and workspaces: a steady batch size never allocates.
-  nn::Matrix state_, next_state_, critic_in_, next_critic_in_, target_, dq_, dx_, da_, demo_state_, demo_da_;
-  nn::MlpWorkspace actor_ws_, critic_ws_, target_actor_ws_, target_critic_ws_, critic_pi_ws_, demo_ws_;
+  // Preallocated per-partition buffers and workspaces: a steady batch size never allocates.
+  std::vector<Partition> parts_;
+  ThreadPool pool_;
 };
 
 }  // namespace pnp::rl

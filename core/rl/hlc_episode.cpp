@@ -39,7 +39,7 @@ HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
   while (!env.needs_reset()) {
     HlcDecision d;
     out.observations.push_back(env.observation());
-    net.normalise(env.observation(), env.episode_goal(), input);
+    net.encode(env.observation(), env.episode_goal(), env.task_state(), input);
     std::array<double, sim::kNumSubtasks> logits{};
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);

@@ -20,10 +20,12 @@ void store(std::vector<float>& dst, std::size_t slot, std::size_t width, const V
 
 }  // namespace
 
-SegmentReplay::SegmentReplay(long long capacity, sim::Objective objective, double object_width_m)
+SegmentReplay::SegmentReplay(long long capacity, sim::Objective objective, double object_width_m,
+                             RewardKind reward)
     : capacity_(static_cast<std::size_t>(capacity)),
       objective_(objective),
-      object_width_m_(object_width_m) {
+      object_width_m_(object_width_m),
+      reward_kind_(reward) {
   if (capacity <= 0)
     throw_invalid_argument("buffer_size", "a positive integer", std::to_string(capacity));
   // Storage grows with use (up to capacity), so a large default buffer costs nothing
@@ -78,6 +80,9 @@ float SegmentReplay::done_for(std::size_t index, const sim::Goal& goal) const {
 }
 
 float SegmentReplay::reward_for(std::size_t index, const sim::Goal& goal) const {
+  if (reward_kind_ == RewardKind::kSparse) {
+    return sim::is_task_success(next_achieved(index), goal) ? 0.0f : -1.0f;
+  }
   return static_cast<float>(sim::compute_reward(next_achieved(index), goal));
 }
 

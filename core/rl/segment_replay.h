@@ -32,9 +32,15 @@ struct SampledBatch {
   int relabelled = 0;
 };
 
+enum class RewardKind {
+  kDense,   // -||achieved - goal|| (the subtask experts)
+  kSparse,  // -1 until the achieved goal is within 0.05 m of the goal, then 0 (end-to-end)
+};
+
 class SegmentReplay {
  public:
-  SegmentReplay(long long capacity, sim::Objective objective, double object_width_m);
+  SegmentReplay(long long capacity, sim::Objective objective, double object_width_m,
+                RewardKind reward = RewardKind::kDense);
 
   // Adds one segment (in time order). Segments longer than the capacity are refused.
   void add_segment(const std::vector<Transition>& segment);
@@ -60,6 +66,7 @@ class SegmentReplay {
   std::size_t capacity_;
   sim::Objective objective_;
   double object_width_m_;
+  RewardKind reward_kind_;
   std::vector<float> observation_, next_observation_, goal_, action_, next_achieved_;
   std::vector<std::uint32_t> to_end_;  // transitions left in the segment, this one included
   std::size_t next_ = 0, size_ = 0;

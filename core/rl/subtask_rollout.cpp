@@ -61,3 +61,28 @@ SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
 }
 
 }  // namespace pnp::rl
+
+namespace pnp::rl {
+
+SubtaskEpisode run_end_to_end_episode(sim::PickPlaceEnv& env, sim::SubtaskPolicy& policy,
+                                      const ExplorationNoise& noise, std::uint64_t episode_seed,
+                                      Rng& noise_rng) {
+  SubtaskEpisode out;
+  env.reset(episode_seed);
+  while (!env.needs_reset()) {
+    const sim::Observation observation = env.observation();
+    const sim::Goal goal = env.episode_goal();
+    // The subtask argument only matters to a scripted gripper, which end-to-end never has.
+    const sim::Action action = explore(
+        policy.act(sim::Subtask::kRetract, observation, goal, env.task_state()), noise, noise_rng);
+    const sim::StepResult r = env.step(action, goal, sim::Objective::kTask);
+    ++out.env_steps;
+    if (r.fault != sim::PhysicsFault::kNone) break;
+    out.segment.push_back({observation, action, goal, r.observation});
+  }
+  out.subtask_done = !out.segment.empty() && env.needs_reset() &&
+                     sim::is_task_success(env.task_state().object, env.episode_goal());
+  return out;
+}
+
+}  // namespace pnp::rl

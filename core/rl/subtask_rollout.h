@@ -36,6 +36,12 @@ SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
                                    sim::SubtaskPolicy& expert, const ExplorationNoise* noise,
                                    std::uint64_t episode_seed, Rng& noise_rng);
 
+// One end-to-end training episode: the policy acts on the episode goal for all 50 steps
+// (objective "task"); the whole episode is one segment.
+SubtaskEpisode run_end_to_end_episode(sim::PickPlaceEnv& env, sim::SubtaskPolicy& policy,
+                                      const ExplorationNoise& noise, std::uint64_t episode_seed,
+                                      Rng& noise_rng);
+
 // Adds exploration to a deterministic action: with probability random_probability a
 // uniform random motion (and gripper command, if random_gripper), otherwise Gaussian
 // noise on every dimension; clipped to [-1, 1].

@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <chrono>
 
+#include "rl/end_to_end_evaluation.h"
 #include "rl/learned_expert.h"
 #include "rl/seed_streams.h"
 #include "rl/subtask_rollout.h"
-#include "sim/scripted_expert.h"
 #include "sim/scripted_evaluation.h"
+#include "sim/scripted_expert.h"
 
 namespace pnp::rl {
 namespace {
@@ -35,10 +36,12 @@ void update_normalizers(DdpgHerAgent& agent, const std::vector<Transition>& segm
 }
 
 // DAgger labelling: the action stored for each visited state is the scripted expert's.
-void label_with_teacher(std::vector<Transition>& segment, sim::Subtask subtask, double object_width_m) {
+void label_with_teacher(std::vector<Transition>& segment, sim::Subtask subtask,
+                        double object_width_m) {
   for (Transition& tr : segment) {
     // For retract the goal acted on is the episode goal; the other experts ignore it.
-    tr.action = sim::scripted_action(subtask, sim::TaskState::from(tr.observation, tr.goal, object_width_m));
+    tr.action = sim::scripted_action(subtask,
+                                     sim::TaskState::from(tr.observation, tr.goal, object_width_m));
   }
 }
 
@@ -53,9 +56,12 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
   auto agent = std::make_unique<DdpgHerAgent>(config.ddpg, init_rng);
   if (config.init) restore_agent(*agent, *config.init);
-  const sim::Objective objective = sim::objective_of(config.subtask);
+  const bool end_to_end = config.algorithm == ExpertAlgorithm::kEndToEnd;
+  const sim::Objective objective =
+      end_to_end ? sim::Objective::kTask : sim::objective_of(config.subtask);
   const double object_width = 2 * world->object_spec().half_width_m;
-  SegmentReplay replay(config.ddpg.buffer_size, objective, object_width);
+  SegmentReplay replay(config.ddpg.buffer_size, objective, object_width,
+                       end_to_end ? RewardKind::kSparse : RewardKind::kDense);
   Rng sample_rng(stream_seed(config.seed, Stream::kReplaySampling));
   ThreadPool pool(config.threads);
 
@@ -81,10 +87,10 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   // Demonstrations: scripted episodes of this subtask, counted as training episodes,
   // stored in the replay, cloned into the actor before exploration starts, and kept as a
   // behaviour-cloning term in every actor update.
-  const bool ddpg = config.algorithm == ExpertAlgorithm::kDdpgHer;
+  const bool ddpg = config.algorithm == ExpertAlgorithm::kDdpgHer || end_to_end;
   SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
   SampledBatch demo_batch;
-  if (ddpg && config.ddpg.demo_episodes > 0 && !config.init) {
+  if (ddpg && !end_to_end && config.ddpg.demo_episodes > 0 && !config.init) {
     const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
     std::vector<SubtaskEpisode> demo(demos);
     pool.parallel_for(demos, [&](std::size_t i) {
@@ -120,6 +126,11 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
       sim::SubtaskPolicy& actor = offline ? static_cast<sim::SubtaskPolicy&>(teacher) : *own;
       const auto index = static_cast<std::uint64_t>(first_episode) + i;
       Rng noise_rng(derive_seed(noise_stream, index));
+      if (end_to_end) {
+        episodes[i] = run_end_to_end_episode(envs[i], actor, noise,
+                                             derive_seed(episode_stream, index), noise_rng);
+        return;
+      }
       episodes[i] = run_subtask_episode(envs[i], config.subtask, actor, offline ? nullptr : &noise,
                                         derive_seed(episode_stream, index), noise_rng);
       if (config.algorithm == ExpertAlgorithm::kBcOnline) {
@@ -144,7 +155,8 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
         }
         replay.sample(config.ddpg.batch_size, future_p, sample_rng, batch);
         const bool with_demos = demo_replay.size() > 0 && config.ddpg.demo_bc_weight > 0;
-        if (with_demos) demo_replay.sample(config.ddpg.demo_batch_size, 0.0, sample_rng, demo_batch);
+        if (with_demos)
+          demo_replay.sample(config.ddpg.demo_batch_size, 0.0, sample_rng, demo_batch);
         const UpdateStats s = agent->update(batch, with_demos ? &demo_batch : nullptr);
         loss_sum_critic += s.critic_loss;
         loss_sum_actor += s.actor_loss;
@@ -158,19 +170,27 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     // Evaluation on the fixed, fresh evaluation episodes.
     const auto eval_start = Clock::now();
     const LearnedExpert learned(agent->snapshot(), config.ddpg.learn_gripper);
-    std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> experts{&scripted, &scripted,
-                                                                     &scripted};
-    experts[static_cast<std::size_t>(config.subtask)] = &learned;
-    const auto report =
-        sim::evaluate_pipeline(world, experts, config.stop.eval_episodes, eval_stream, pool);
-    result.eval_env_steps += report.env_steps;
-    result.eval_wall_s += seconds_since(eval_start);
     CurvePoint point;
+    if (end_to_end) {
+      const EndToEndReport report =
+          evaluate_end_to_end(world, learned, config.stop.eval_episodes, eval_stream, pool);
+      result.eval_env_steps += report.env_steps;
+      point.task_success = point.subtask_success = report.success_rate;
+    } else {
+      std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> experts{&scripted, &scripted,
+                                                                       &scripted};
+      experts[static_cast<std::size_t>(config.subtask)] = &learned;
+      const auto report =
+          sim::evaluate_pipeline(world, experts, config.stop.eval_episodes, eval_stream, pool);
+      result.eval_env_steps += report.env_steps;
+      point.task_success = report.success_rate;
+      point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];
+    }
+    result.eval_wall_s += seconds_since(eval_start);
     point.env_steps = result.train_env_steps;
     point.episodes = result.train_episodes;
     point.wall_s = seconds_since(start);
-    point.task_success = report.success_rate;
-    point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];
+    point.eval_wall_s = result.eval_wall_s;
     point.critic_loss =
         updates_since_eval ? loss_sum_critic / static_cast<double>(updates_since_eval) : 0;
     point.actor_loss =
@@ -184,7 +204,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     // retract closing the gripper), so task success alone would credit an expert that
     // only runs out its step cap. Nothing follows retract, and its predicate is a
     // stricter tolerance (0.01 m) of what task success measures (0.05 m).
-    const double score = config.subtask == sim::Subtask::kRetract
+    const double score = end_to_end || config.subtask == sim::Subtask::kRetract
                              ? point.task_success
                              : std::min(point.task_success, point.subtask_success);
     const bool done = stop.record(point, score, result);

@@ -22,6 +22,7 @@ enum class ExpertAlgorithm {
   kBcOnline,   // behaviour cloning, DAgger-style: the learner acts (with noise), every
                // visited state is labelled with the scripted expert's action
   kBcOffline,  // behaviour cloning on scripted demonstrations only
+  kEndToEnd,   // one DDPG+HER policy for the whole task, sparse reward, no demonstrations
 };
 
 struct SubtaskTrainingConfig {

@@ -40,3 +40,14 @@ bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& 
 }
 
 }  // namespace pnp::rl
+
+namespace pnp::rl {
+
+double wall_to_target(const TrainingResult& result) {
+  for (const CurvePoint& p : result.curve) {
+    if (result.reached && p.env_steps == result.steps_to_target) return p.wall_s - p.eval_wall_s;
+  }
+  return result.wall_s - result.eval_wall_s;
+}
+
+}  // namespace pnp::rl

@@ -12,6 +12,7 @@ struct CurvePoint {
   long long env_steps = 0;     // training environment steps so far (prefixes included)
   long long episodes = 0;      // training episodes so far
   double wall_s = 0;           // since the run started, evaluation included
+  double eval_wall_s = 0;      // of which evaluation, cumulative
   double task_success = 0;     // object-based, on the fresh evaluation episodes
   double subtask_success = 0;  // the trained subtask's predicate fired (experts only)
   double critic_loss = 0;      // mean over the last interval's updates
@@ -27,6 +28,11 @@ struct StopRule {
   int consecutive = 2;
   void validate() const;
 };
+
+struct TrainingResult;
+// Training wall time (evaluation excluded) until the first of the two evaluations that
+// reached the target, or until the run stopped if it never did.
+double wall_to_target(const TrainingResult& result);
 
 struct TrainingResult {
   bool reached = false;

@@ -118,6 +118,24 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
   EXPECT_LE(out.result.steps_to_target, out.result.train_env_steps);
 }
 
+TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
+  SubtaskTrainingConfig config;
+  config.algorithm = ExpertAlgorithm::kBcOnline;
+  config.subtask = sim::Subtask::kApproach;
+  config.seed = 2;
+  config.ddpg.hidden = {64, 64};
+  config.ddpg.updates_per_cycle = 20;
+  config.stop.max_steps = 3000;
+  config.stop.eval_interval_steps = 500;
+  config.stop.eval_episodes = 30;
+  config.stop.target_success = 0.9;
+  config.threads = 2;
+  const auto out = train_subtask_expert(
+      sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock), config);
+  EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
+  EXPECT_EQ(out.result.curve.front().critic_loss, 0.0) << "behaviour cloning trains no critic";
+}
+
 TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
   auto run = [](std::size_t threads) {
     SubtaskTrainingConfig config;

@@ -95,3 +95,24 @@ TEST(SegmentReplay, FutureProbabilityForK4IsEightyPercent) {
 
 }  // namespace
 }  // namespace pnp::rl
+
+namespace pnp::rl {
+namespace {
+
+TEST(SegmentReplay, SparseRewardForTheEndToEndBaseline) {
+  // Task objective: the achieved goal is the object, reward -1 until within 0.05 m.
+  SegmentReplay replay(100, sim::Objective::kTask, 0.05, RewardKind::kSparse);
+  std::vector<Transition> seg(1);
+  seg[0].observation = sim::Observation::Zero();
+  seg[0].next_observation = sim::Observation::Zero();
+  seg[0].next_observation(sim::obs::kObjectPos) = 1.0;
+  seg[0].goal = sim::Goal(1.0, 0, 0);
+  seg[0].action = sim::Action::Zero();
+  replay.add_segment(seg);
+  EXPECT_EQ(replay.reward_for(0, {1.04, 0, 0}), 0.0f);
+  EXPECT_EQ(replay.reward_for(0, {1.06, 0, 0}), -1.0f);
+  EXPECT_EQ(replay.done_for(0, {1.0, 0, 0}), 0.0f) << "the whole task never terminates early";
+}
+
+}  // namespace
+}  // namespace pnp::rl

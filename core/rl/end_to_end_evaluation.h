@@ -1,0 +1,22 @@
+#pragma once
+// Evaluates an end-to-end policy: it acts on the episode goal for all 50 steps; success
+// is read at the last step, from the object.
+
+#include <memory>
+
+#include "common/thread_pool.h"
+#include "sim/subtask_policy.h"
+#include "sim/world_model.h"
+
+namespace pnp::rl {
+
+struct EndToEndReport {
+  double success_rate = 0;
+  long long env_steps = 0;
+};
+
+EndToEndReport evaluate_end_to_end(const std::shared_ptr<const sim::WorldModel>& world,
+                                   const sim::SubtaskPolicy& policy, int episodes,
+                                   std::uint64_t seed, ThreadPool& pool);
+
+}  // namespace pnp::rl

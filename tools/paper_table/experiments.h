@@ -1,0 +1,48 @@
+#pragma once
+// The experiments behind the paper's Table I: train the hierarchy (three subtask experts,
+// then the choreographer over them) with DDPG+HER or BC experts, and the end-to-end
+// DDPG+HER baseline, each to the same success level; evaluate the final hierarchy on
+// held-out episodes.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rl/subtask_trainer.h"
+#include "sim/object_shape.h"
+#include "sim/robot.h"
+
+namespace pnp::tools {
+
+struct ExperimentSettings {
+  sim::Robot robot = sim::Robot::kFetch;
+  sim::ObjectShape object = sim::ObjectShape::kBlock;
+  rl::StopRule expert_stop, hlc_stop, e2e_stop;
+  std::size_t threads = 0;
+  int held_out_episodes = 1000;
+};
+
+struct RoleRun {
+  std::string role;  // approach, manipulate, retract, hlc, e2e
+  rl::TrainingResult result;
+};
+
+struct MethodRun {
+  std::string method;  // ddpg_her, bc, e2e
+  std::uint64_t seed = 0;
+  std::vector<RoleRun> roles;
+  bool reached = false;          // every part reached the target
+  long long total_steps = 0;     // training steps of all parts (to target, or spent if not reached)
+  double total_wall_s = 0;       // training wall time of all parts, evaluation excluded
+  double held_out_success = -1;  // hierarchy on held-out episodes (-1: not evaluated)
+};
+
+using Progress =
+    std::function<void(const std::string& method, const std::string& role, const rl::CurvePoint&)>;
+
+MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
+                        const ExperimentSettings& s, const Progress& progress);
+MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s, const Progress& progress);
+
+}  // namespace pnp::tools

@@ -1,0 +1,26 @@
+#pragma once
+// Writes the results of the Table I experiments: docs/RESULTS.md (tables with the paper's
+// numbers beside ours), a CSV of every learning curve, and an SVG of the curves.
+
+#include <string>
+#include <vector>
+
+#include "tools/paper_table/experiments.h"
+
+namespace pnp::tools {
+
+struct ReportContext {
+  std::string command;  // how to reproduce
+  std::string code_commit;
+  std::vector<std::uint64_t> seeds;
+  bool quick = false;
+  ExperimentSettings settings;
+  std::vector<std::pair<std::string, double>>
+      held_out;  // "robot object" -> success (1000 episodes)
+};
+
+std::string results_markdown(const std::vector<MethodRun>& runs, const ReportContext& context);
+std::string curves_csv(const std::vector<MethodRun>& runs);
+std::string curves_svg(const std::vector<MethodRun>& runs);
+
+}  // namespace pnp::tools

@@ -1,0 +1,110 @@
+// pnp-paper-table: reproduces the paper's Table I on the fetch world (DDPG+HER experts +
+// HLC, BC experts + HLC, end-to-end DDPG+HER; several seeds; all to the same success
+// level), evaluates the final hierarchy on 1000 held-out episodes on both robots, and
+// writes docs/RESULTS.md, docs/results/curves.csv and docs/results/learning_curves.svg.
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "build_info.h"
+#include "common/validate.h"
+#include "tools/common/cli.h"
+#include "tools/common/training_json.h"
+#include "tools/paper_table/report.h"
+
+namespace {
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace pnp;
+  CLI::App app{"Reproduce the paper's Table I and write docs/RESULTS.md", "pnp-paper-table"};
+  int seeds = 3;
+  std::uint64_t first_seed = 0;
+  bool quick = false, skip_bc = false, skip_e2e = false, skip_panda = false;
+  long long e2e_max_steps = 1'500'000, expert_max_steps = 200'000, hlc_max_steps = 100'000;
+  std::string out_dir = "docs";
+  tools::ExperimentSettings s;
+  app.add_option("--seeds", seeds, "seeds per method")->capture_default_str();
+  app.add_option("--first-seed", first_seed)->capture_default_str();
+  app.add_flag("--quick", quick,
+               "one seed; caps: experts 15k, HLC 20k, end-to-end 40k steps; 500 held-out episodes");
+  app.add_option("--e2e-max-steps", e2e_max_steps)->capture_default_str();
+  app.add_option("--expert-max-steps", expert_max_steps)->capture_default_str();
+  app.add_option("--hlc-max-steps", hlc_max_steps)->capture_default_str();
+  app.add_flag("--skip-bc", skip_bc);
+  app.add_flag("--skip-e2e", skip_e2e);
+  app.add_flag("--skip-panda", skip_panda,
+               "skip the held-out evaluation of a hierarchy trained on panda");
+  app.add_option("--threads", s.threads, "worker threads (0: all cores)");
+  app.add_option("--out", out_dir, "where RESULTS.md and results/ go")->capture_default_str();
+  return tools::run_tool(app, argc, argv, [&] {
+    require_positive(seeds, "--seeds");
+    if (quick) {
+      seeds = 1;
+      e2e_max_steps = std::min(e2e_max_steps, 40'000LL);
+      expert_max_steps = std::min(expert_max_steps, 15'000LL);
+      hlc_max_steps = std::min(hlc_max_steps, 20'000LL);
+      s.held_out_episodes = 500;
+    }
+    s.expert_stop = {expert_max_steps, 0.95, 1000, 100, 2};
+    s.hlc_stop = {hlc_max_steps, 0.95, 1000, 100, 2};
+    s.e2e_stop = {e2e_max_steps, 0.95, 10'000, 100, 2};
+    auto progress = [](const std::string& method, const std::string& role,
+                       const rl::CurvePoint& p) {
+      tools::print_progress(stderr, method + "/" + role, p);
+    };
+    std::vector<tools::MethodRun> runs;
+    tools::ReportContext context;
+    context.command = "build/bin/pnp-paper-table";
+    for (int i = 1; i < argc; ++i) context.command += std::string(" ") + argv[i];
+    context.code_commit = kCodeCommit;
+    context.quick = quick;
+    context.settings = s;
+    const std::filesystem::path out(out_dir);
+    // Rewritten after every finished run, so a long run's results are never lost.
+    auto write_all = [&] {
+      context.held_out.clear();
+      for (const auto& r : runs) {
+        if (r.method == "ddpg_her" && r.held_out_success >= 0) {
+          context.held_out.emplace_back(std::string(sim::robot_name(s.robot)) + " block, seed " + std::to_string(r.seed),
+                                        r.held_out_success);
+        }
+      }
+      write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
+      write_text(out / "results" / "curves.csv", tools::curves_csv(runs));
+      write_text(out / "results" / "learning_curves.svg", tools::curves_svg(runs));
+    };
+    for (int k = 0; k < seeds; ++k) {
+      const std::uint64_t seed = first_seed + static_cast<std::uint64_t>(k);
+      context.seeds.push_back(seed);
+      runs.push_back(tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, seed, s, progress));
+      write_all();
+      if (!skip_e2e) {
+        runs.push_back(tools::run_end_to_end(seed, s, progress));
+        write_all();
+      }
+      if (!skip_bc) {
+        runs.push_back(tools::run_hierarchy(rl::ExpertAlgorithm::kBcOnline, seed, s, progress));
+        write_all();
+      }
+    }
+    if (!skip_panda) {
+      tools::ExperimentSettings panda = s;
+      panda.robot = sim::Robot::kPanda;
+      const auto r = tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, first_seed, panda, progress);
+      write_all();
+      context.held_out.emplace_back("panda block, seed " + std::to_string(first_seed), r.held_out_success);
+      write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
+    }
+    std::printf("%s", tools::results_markdown(runs, context).c_str());
+  });
+}
