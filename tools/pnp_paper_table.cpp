@@ -75,8 +75,9 @@ int main(int argc, char** argv) {
       context.held_out.clear();
       for (const auto& r : runs) {
         if (r.method == "ddpg_her" && r.held_out_success >= 0) {
-          context.held_out.emplace_back(std::string(sim::robot_name(s.robot)) + " block, seed " + std::to_string(r.seed),
-                                        r.held_out_success);
+          context.held_out.emplace_back(
+              std::string(sim::robot_name(s.robot)) + " block, seed " + std::to_string(r.seed),
+              r.held_out_success);
         }
       }
       write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
@@ -100,9 +101,11 @@ int main(int argc, char** argv) {
     if (!skip_panda) {
       tools::ExperimentSettings panda = s;
       panda.robot = sim::Robot::kPanda;
-      const auto r = tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, first_seed, panda, progress);
+      const auto r =
+          tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, first_seed, panda, progress);
       write_all();
-      context.held_out.emplace_back("panda block, seed " + std::to_string(first_seed), r.held_out_success);
+      context.held_out.emplace_back("panda block, seed " + std::to_string(first_seed),
+                                    r.held_out_success);
       write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
     }
     std::printf("%s", tools::results_markdown(runs, context).c_str());

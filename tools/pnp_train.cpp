@@ -233,14 +233,16 @@ int main(int argc, char** argv) {
   app.add_option("--entropy", o.a3c.entropy_weight)->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     nlohmann::json summary;
+    const bool expert = o.role == "approach" || o.role == "manipulate" || o.role == "retract";
     if (o.role == "e2e") {
-      if (o.algo != "ddpg_her")
+      if (o.algo != "ddpg_her") {
         throw_invalid_argument("--algo", "ddpg_her for the end-to-end baseline",
                                "\"" + o.algo + "\"");
+      }
       summary = train_expert(o);
-    } else if (o.role == "approach" || o.role == "manipulate" || o.role == "retract") {
-      if (o.algo != "ddpg_her") {
-        throw_invalid_argument("--algo", "ddpg_her for a subtask expert in this build",
+    } else if (expert) {
+      if (o.algo != "ddpg_her" && o.algo != "bc" && o.algo != "bc_offline") {
+        throw_invalid_argument("--algo", "one of ddpg_her, bc, bc_offline for a subtask expert",
                                "\"" + o.algo + "\"");
       }
       summary = train_expert(o);
@@ -249,7 +251,7 @@ int main(int argc, char** argv) {
         throw_invalid_argument("--algo", "a3c for the choreographer", "\"" + o.algo + "\"");
       summary = train_hlc(o);
     } else {
-      throw_invalid_argument("--role", "approach, manipulate, retract or hlc in this build",
+      throw_invalid_argument("--role", "one of approach, manipulate, retract, hlc, e2e",
                              "\"" + o.role + "\"");
     }
     if (o.json) {

@@ -66,7 +66,7 @@ sim::Action ActorSnapshot::act(const sim::Observation& observation, const sim::G
   return out.col(0).cast<double>();
 }
 
-DdpgHerAgent::DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng)
+DdpgHerAgent::DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng, std::size_t update_threads)
     : config_((config.validate(), config)),
       actor_(actor_spec(config_)),
       critic_(critic_spec(config_)),
@@ -76,7 +76,7 @@ DdpgHerAgent::DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng)
       goal_norm_(kGoal, config_.norm_clip, config_.norm_std_floor),
       actor_adam_(actor_.params().size(), {config_.actor_learning_rate}),
       critic_adam_(critic_.params().size(), {config_.critic_learning_rate}),
-      pool_(static_cast<std::size_t>(kUpdatePartitions)) {
+      pool_(update_threads) {
   actor_.initialise(init_rng);
   critic_.initialise(init_rng);
   sync_targets();

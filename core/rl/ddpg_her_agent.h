@@ -61,7 +61,9 @@ inline constexpr int kUpdatePartitions = 2;
 
 class DdpgHerAgent {
  public:
-  DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng);
+  // update_threads: threads for the update's partitions (the result does not depend on it).
+  DdpgHerAgent(const DdpgHerConfig& config, Rng& init_rng,
+               std::size_t update_threads = kUpdatePartitions);
   ~DdpgHerAgent();
   DdpgHerAgent(const DdpgHerAgent&) = delete;
   DdpgHerAgent& operator=(const DdpgHerAgent&) = delete;

@@ -66,6 +66,33 @@ TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
   }
 }
 
+// The update's batch halves run on two threads or one; the weights must be identical.
+TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
+  DdpgHerConfig config;  // 3 x 256, batch 256: the OpenBLAS path
+  Rng rng_a(9), rng_b(9), data(10);
+  DdpgHerAgent one(config, rng_a, 1), two(config, rng_b, 2);
+  SampledBatch batch;
+  auto fill = [&](std::vector<float>& v, std::size_t size) {
+    v.resize(size);
+    for (float& x : v) x = static_cast<float>(data.uniform(-1, 1));
+  };
+  fill(batch.observation, 256 * 25);
+  fill(batch.next_observation, 256 * 25);
+  fill(batch.goal, 256 * 3);
+  fill(batch.action, 256 * 4);
+  fill(batch.reward, 256);
+  for (float& r : batch.reward) r = -std::abs(r);
+  batch.done.assign(256, 0.0f);
+  for (int i = 0; i < 5; ++i) {
+    const UpdateStats a = one.update(batch), b = two.update(batch);
+    EXPECT_EQ(a.critic_loss, b.critic_loss);
+  }
+  EXPECT_TRUE(std::equal(one.actor().params().begin(), one.actor().params().end(),
+                         two.actor().params().begin()));
+  EXPECT_TRUE(std::equal(one.critic().params().begin(), one.critic().params().end(),
+                         two.critic().params().begin()));
+}
+
 TEST(DdpgHer, BehaviourCloningFitsTheDemonstratedActions) {
   DdpgHerConfig config;
   config.hidden = {64, 64};
