@@ -117,10 +117,10 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
   md += "| End-to-end DDPG+HER | - | - | - | - | 1.4M | ~1 h |\n";
   md += "| BC experts + HLC | 152k | 52k | 168k | 98k | 470k | ~25 min |\n";
   md += "| DDPG+HER experts + HLC | 150k | 30k | 38k | 98k | 316k | ~18 min |\n\n";
-  md +=
-      "## Final success of each run\n\n| method | seed | reached | final evaluation success | "
-      "held-out (1000 episodes) |\n"
-      "|---|---|---|---|---|\n";
+  md += fmt::format(
+      "## Final success of each run\n\n| method | seed | reached | final evaluation success | held-out ({} "
+      "episodes) |\n|---|---|---|---|---|\n",
+      c.settings.held_out_episodes);
   for (const auto& r : runs) {
     const double final_success = r.roles.empty() ? 0 : r.roles.back().result.final_success;
     md += fmt::format(
@@ -129,9 +129,8 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
         r.held_out_success < 0 ? std::string("-") : fmt::format("{:.3f}", r.held_out_success));
   }
   if (!c.held_out.empty()) {
-    md +=
-        "\n## Final hierarchy on held-out episodes\n\n| world | task success (1000 episodes) "
-        "|\n|---|---|\n";
+    md += fmt::format("\n## Final hierarchy on held-out episodes\n\n| world | task success ({} episodes) |\n|---|---|\n",
+                      c.settings.held_out_episodes);
     for (const auto& [world, success] : c.held_out)
       md += fmt::format("| {} | {:.3f} |\n", world, success);
   }
