@@ -100,6 +100,19 @@ PhysicsFault PickPlaceEnv::detect_fault() const {
   if (d->warning[mjWARN_CONTACTFULL].number > 0 || d->warning[mjWARN_CNSTRFULL].number > 0) {
     return PhysicsFault::kCapacity;
   }
+  const WorldIds& ids = world_->ids();
+  const mjtNum* v = d->qvel + ids.object_dof;  // free joint: linear then angular
+  const mjtNum* p = d->qpos + ids.object_qpos;
+  const double speed_sq = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  const double spin_sq = v[3] * v[3] + v[4] * v[4] + v[5] * v[5];
+  const double dx = p[0] - layout::kTableCenter_x, dy = p[1] - layout::kTableCenter_y,
+               dz = p[2] - layout::kTableTop_z;
+  constexpr double kMaxDistance = layout::kMaxObjectDistanceFromTable_m;
+  if (speed_sq > layout::kMaxObjectSpeed_mps * layout::kMaxObjectSpeed_mps ||
+      spin_sq > layout::kMaxObjectSpin_radps * layout::kMaxObjectSpin_radps ||
+      dx * dx + dy * dy + dz * dz > kMaxDistance * kMaxDistance) {
+    return PhysicsFault::kEjected;
+  }
   return PhysicsFault::kNone;
 }
 

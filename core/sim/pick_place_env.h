@@ -31,6 +31,7 @@ enum class PhysicsFault {
   kUnstable,   // MuJoCo flagged a bad qpos/qvel/qacc (it may have reset its data)
   kNonFinite,  // NaN or Inf in the state
   kCapacity,   // contact or constraint buffer full: contacts were dropped
+  kEjected,    // the object moves impossibly fast or leaves the scene: a contact blew up
 };
 
 struct StepResult {

@@ -39,6 +39,14 @@ inline constexpr double kActionPositionScale = 0.05;
 inline const Eigen::Vector3d kWorkspaceMin{1.05, 0.40, kTableTop_z + 0.005};
 inline const Eigen::Vector3d kWorkspaceMax{1.55, 1.10, kTableTop_z + 0.45};
 
+// Plausibility of the object's motion. The gripper moves at most 1.25 m/s (0.05 m per
+// 40 ms), so faster objects, fast spins or an object far from the table mean a contact
+// blew up without producing a NaN (measured: an object flung 3.6 m at 200 rad/s, which
+// poisoned a critic's training data). Such a step is a physics fault.
+inline constexpr double kMaxObjectSpeed_mps = 5.0;
+inline constexpr double kMaxObjectSpin_radps = 100.0;
+inline constexpr double kMaxObjectDistanceFromTable_m = 1.0;
+
 // Task success: the object's centre within this distance of the episode goal.
 inline constexpr double kTaskSuccessDistance = 0.05;
 

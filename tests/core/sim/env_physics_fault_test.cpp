@@ -41,6 +41,28 @@ TEST(PhysicsFault, HugeVelocityTriggersMuJoCosInstabilityWarning) {
       << "the fresh episode puts the object back on the table";
 }
 
+// A contact blow-up can fling the object without any NaN or MuJoCo warning (seen: 3.6 m
+// away at 200 rad/s). Impossible object motion is a fault too.
+TEST(PhysicsFault, ObjectFlungAwayIsDetectedAndTheWorldReset) {
+  PickPlaceEnv env(testing::world());
+  env.reset(8);
+  env.step(Action{0, 0, 0, 1}, Goal{1, 1, 1}, Objective::kApproach);
+  env.mj_data()->qvel[env.world().ids().object_dof] = 20.0;  // 20 m/s sideways: finite
+  const StepResult r = env.step(Action{0, 0, 0, 1}, Goal{1, 1, 1}, Objective::kApproach);
+  EXPECT_EQ(r.fault, PhysicsFault::kEjected);
+  EXPECT_TRUE(r.episode_over);
+  EXPECT_EQ(env.elapsed_steps(), 0);
+  EXPECT_LT((object_position(r.observation) - gripper_position(r.observation)).norm(), 0.5);
+}
+
+TEST(PhysicsFault, FastSpinIsAFault) {
+  PickPlaceEnv env(testing::world(Robot::kPanda));
+  env.reset(9);
+  env.mj_data()->qvel[env.world().ids().object_dof + 5] = 300.0;  // rad/s about z
+  EXPECT_EQ(env.step(Action{0, 0, 0, 1}, Goal{1, 1, 1}, Objective::kApproach).fault,
+            PhysicsFault::kEjected);
+}
+
 TEST(PhysicsFault, NormalEpisodesReportNoFault) {
   PickPlaceEnv env(testing::world());
   env.reset(4);
