@@ -1,6 +1,7 @@
 #include "rl/a3c_trainer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -176,8 +177,10 @@ HlcTrainingOutput train_choreographer(
   StopTracker stop(config.stop);
   TicketGate gate;
   long long next_eval = config.stop.eval_interval_steps;
-  long long stop_ticket = -1;  // the ticket at whose evaluation training stopped
-  std::vector<long long> steps_by_ticket;
+  // Episodes other workers had in flight when training stopped: they ran, so their steps
+  // count, though their gradients are never applied. Which episodes these are depends only
+  // on the stopping ticket, so the total is reproducible.
+  std::atomic<long long> in_flight_steps{0};
   std::exception_ptr failure;
   std::mutex failure_mutex;
   const auto workers = static_cast<long long>(config.a3c.workers);
@@ -199,7 +202,10 @@ HlcTrainingOutput train_choreographer(
         local.zero_grads();
         episode_gradients(local, episode, config.a3c);
         gate.wait_for(ticket);
-        if (gate.stopped()) return;
+        if (gate.stopped()) {
+          in_flight_steps += episode.env_steps;
+          return;
+        }
         // Apply this worker's gradients to the shared network, in ticket order.
         auto grads = local.gradient_blocks();
         double norm_sq = 0;
@@ -223,7 +229,6 @@ HlcTrainingOutput train_choreographer(
         shared->normalizer().refresh();
         result.train_env_steps += episode.env_steps;
         ++result.train_episodes;
-        steps_by_ticket.push_back(result.train_env_steps);
         if (result.train_env_steps >= next_eval) {
           const auto eval_start = Clock::now();
           CurvePoint point;
@@ -241,7 +246,6 @@ HlcTrainingOutput train_choreographer(
           const bool finished = stop.record(point, point.task_success, result);
           if (progress) progress(point);
           if (finished) {
-            stop_ticket = ticket;
             gate.stop();
             return;
           }
@@ -260,9 +264,7 @@ HlcTrainingOutput train_choreographer(
     for (long long w = 0; w < workers; ++w) threads.emplace_back(worker, w);
   }
   if (failure) std::rethrow_exception(failure);
-  // The other workers' episodes in flight at the stopping evaluation were started before
-  // it and count as training steps; their gradients were never applied.
-  (void)stop_ticket;
+  result.train_env_steps += in_flight_steps.load();
   result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   return {std::move(result), std::move(shared)};
 }

@@ -36,6 +36,8 @@ TEST(A3c, ReproducibleForAGivenSeedAndWorkerCount) {
     EXPECT_TRUE(std::equal(pa[k].begin(), pa[k].end(), pb[k].begin()));
   EXPECT_GE(a.result.train_env_steps, 600);
   EXPECT_EQ(a.result.train_env_steps % 50, 0) << "every choreographer episode runs all 50 steps";
+  // The other two workers' episodes in flight at the stop ran, so they count.
+  EXPECT_EQ(a.result.train_env_steps, a.result.curve.back().env_steps + 2 * 50);
 }
 
 TEST(A3c, RefusesInvalidConfiguration) {

@@ -122,20 +122,28 @@ TEST(DdpgHer, BehaviourCloningFitsTheDemonstratedActions) {
   EXPECT_LT(last, first * 0.1);
 }
 
-// A fast, fixed-seed version of subtask expert training: the approach expert reaches at
-// least 90% subtask (and task) success within a small budget.
-TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
+// A small, fast approach-expert run: 64 x 64 networks, 90% target, 30 evaluation episodes.
+SubtaskTrainingConfig small_approach_run(ExpertAlgorithm algorithm, std::uint64_t seed,
+                                         long long max_steps) {
   SubtaskTrainingConfig config;
+  config.algorithm = algorithm;
   config.subtask = sim::Subtask::kApproach;
-  config.seed = 7;
+  config.seed = seed;
   config.ddpg.hidden = {64, 64};
   config.ddpg.updates_per_cycle = 20;
-  config.ddpg.demo_episodes = 0;  // learn from exploration alone
-  config.stop.max_steps = 4000;
+  config.stop.max_steps = max_steps;
   config.stop.eval_interval_steps = 500;
   config.stop.eval_episodes = 30;
   config.stop.target_success = 0.9;
   config.threads = 2;
+  return config;
+}
+
+// A fast, fixed-seed version of subtask expert training: the approach expert reaches at
+// least 90% subtask (and task) success within a small budget.
+TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
+  SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kDdpgHer, 7, 4000);
+  config.ddpg.demo_episodes = 0;  // learn from exploration alone
   const auto out = train_subtask_expert(
       sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock), config);
   ASSERT_FALSE(out.result.curve.empty());
@@ -146,17 +154,7 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
 }
 
 TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
-  SubtaskTrainingConfig config;
-  config.algorithm = ExpertAlgorithm::kBcOnline;
-  config.subtask = sim::Subtask::kApproach;
-  config.seed = 2;
-  config.ddpg.hidden = {64, 64};
-  config.ddpg.updates_per_cycle = 20;
-  config.stop.max_steps = 3000;
-  config.stop.eval_interval_steps = 500;
-  config.stop.eval_episodes = 30;
-  config.stop.target_success = 0.9;
-  config.threads = 2;
+  const SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kBcOnline, 2, 3000);
   const auto out = train_subtask_expert(
       sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock), config);
   EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
