@@ -15,6 +15,7 @@
 #include "common/rng.h"
 #include "common/validate.h"
 #include "sim/scripted_expert.h"
+#include "sim/subtask_sequence.h"
 #include "sim/vec_env.h"
 #include "sim/world_layout.h"
 #include "tools/common/cli.h"
@@ -41,29 +42,10 @@ StepInputs capture_inputs(const mjModel* m, const mjData* d) {
           {d->qfrc_applied, d->qfrc_applied + m->nv}};
 }
 
-// Chooses the scripted action for env's current state, advancing the pipeline stage.
-struct ScriptedDriver {
-  int stage = 0;
-  int steps_in_stage = 0;
-  Objective objective() const {
-    return stage < kNumSubtasks ? objective_of(kAllSubtasks[static_cast<std::size_t>(stage)])
-                                : Objective::kTask;
-  }
-  Action action(const PickPlaceEnv& env) const {
-    return stage < kNumSubtasks
-               ? scripted_action(kAllSubtasks[static_cast<std::size_t>(stage)], env.task_state())
-               : idle_action();
-  }
-  void advance(const StepResult& r) {
-    if (stage >= kNumSubtasks) return;
-    ++steps_in_stage;
-    if (r.objective_done ||
-        steps_in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)])) {
-      ++stage;
-      steps_in_stage = 0;
-    }
-  }
-};
+// The scripted action for env's current state in the fixed subtask sequence.
+Action scripted_step_action(const SubtaskSequence& sequence, const PickPlaceEnv& env) {
+  return sequence.idle() ? idle_action() : scripted_action(sequence.current(), env.task_state());
+}
 
 // Runs `episodes` scripted episodes; returns the seconds spent inside env.step().
 double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed,
@@ -83,14 +65,14 @@ double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed,
                 {},
                 {}};
     }
-    ScriptedDriver driver;
+    SubtaskSequence sequence;
     while (!env.needs_reset()) {
-      const Action a = driver.action(env);
-      const Goal g = env.objective_goal(driver.objective());
+      const Action a = scripted_step_action(sequence, env);
+      const Goal g = env.objective_goal(sequence.objective());
       const auto t0 = Clock::now();
-      const StepResult r = env.step(a, g, driver.objective());
+      const StepResult r = env.step(a, g, sequence.objective());
       seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-      driver.advance(r);
+      sequence.record_step(r.objective_done);
       if (log) record.steps.push_back(capture_inputs(m, env.mj_data()));
     }
     if (log) {
@@ -136,22 +118,22 @@ double time_vec_env(VecEnv& vec, int steps_per_env, std::uint64_t seed) {
   std::vector<double> actions(n * kActionSize), goals(n * kGoalSize);
   std::vector<Objective> objectives(n);
   std::vector<StepResult> results(n);
-  std::vector<ScriptedDriver> drivers(n);
+  std::vector<SubtaskSequence> sequences(n);
   vec.reset(seed);
   double seconds = 0;
   for (int t = 0; t < steps_per_env; ++t) {
     for (std::size_t i = 0; i < n; ++i) {
-      if (vec.env(i).needs_reset()) drivers[i] = {};
-      const Action a = drivers[i].action(vec.env(i));
-      const Goal g = vec.env(i).objective_goal(drivers[i].objective());
+      if (vec.env(i).needs_reset()) sequences[i] = {};
+      const Action a = scripted_step_action(sequences[i], vec.env(i));
+      const Goal g = vec.env(i).objective_goal(sequences[i].objective());
       std::copy(a.data(), a.data() + kActionSize, actions.data() + i * kActionSize);
       std::copy(g.data(), g.data() + kGoalSize, goals.data() + i * kGoalSize);
-      objectives[i] = drivers[i].objective();
+      objectives[i] = sequences[i].objective();
     }
     const auto t0 = Clock::now();
     vec.step(actions, goals, objectives, results);
     seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-    for (std::size_t i = 0; i < n; ++i) drivers[i].advance(results[i]);
+    for (std::size_t i = 0; i < n; ++i) sequences[i].record_step(results[i].objective_done);
   }
   return seconds;
 }

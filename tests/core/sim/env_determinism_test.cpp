@@ -7,6 +7,7 @@
 
 #include "sim/scripted_evaluation.h"
 #include "sim/scripted_expert.h"
+#include "sim/subtask_sequence.h"
 #include "sim/vec_env.h"
 #include "test_worlds.h"
 
@@ -17,21 +18,15 @@ namespace {
 std::vector<double> trajectory(PickPlaceEnv& env, std::uint64_t seed) {
   std::vector<double> out;
   env.reset(seed);
-  int stage = 0, in_stage = 0;
+  SubtaskSequence sequence;
   while (!env.needs_reset()) {
-    const Objective objective =
-        stage < 3 ? objective_of(kAllSubtasks[static_cast<std::size_t>(stage)]) : Objective::kTask;
+    const Objective objective = sequence.objective();
     const Action a =
-        stage < 3 ? scripted_action(kAllSubtasks[static_cast<std::size_t>(stage)], env.task_state())
-                  : idle_action();
+        sequence.idle() ? idle_action() : scripted_action(sequence.current(), env.task_state());
     const StepResult r = env.step(a, env.objective_goal(objective), objective);
     out.insert(out.end(), r.observation.data(), r.observation.data() + kObservationSize);
     out.push_back(r.reward);
-    if (stage < 3 && (r.objective_done ||
-                      ++in_stage >= step_cap(kAllSubtasks[static_cast<std::size_t>(stage)]))) {
-      ++stage;
-      in_stage = 0;
-    }
+    sequence.record_step(r.objective_done);
   }
   return out;
 }

@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "sim/scripted_expert.h"
+#include "sim/subtask_sequence.h"
 
 namespace pnp::sim {
 namespace {
@@ -98,6 +99,27 @@ TEST(ScriptedExperts, RetractMovesTheObjectTowardsTheGoalWithTheGripperClosed) {
   EXPECT_TRUE(a.head<3>().isApprox(expected));
   EXPECT_EQ(a(3), -1.0);
   EXPECT_EQ(idle_action(), Action(0, 0, 0, -1));
+}
+
+}  // namespace
+}  // namespace pnp::sim
+
+namespace pnp::sim {
+namespace {
+
+TEST(SubtaskSequence, AdvancesOnThePredicateOrTheCapThenIdles) {
+  SubtaskSequence s;
+  EXPECT_EQ(s.current(), Subtask::kApproach);
+  EXPECT_FALSE(s.record_step(false));
+  EXPECT_TRUE(s.record_step(true));  // predicate fired
+  EXPECT_EQ(s.current(), Subtask::kManipulate);
+  for (int t = 1; t < thresholds::kManipulateStepCap; ++t) EXPECT_FALSE(s.record_step(false));
+  EXPECT_TRUE(s.record_step(false));  // cap reached
+  EXPECT_EQ(s.objective(), Objective::kRetract);
+  EXPECT_TRUE(s.record_step(true));
+  EXPECT_TRUE(s.idle());
+  EXPECT_EQ(s.objective(), Objective::kTask);
+  EXPECT_FALSE(s.record_step(true)) << "idle: nothing left to end";
 }
 
 }  // namespace
