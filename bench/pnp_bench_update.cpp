@@ -12,6 +12,7 @@
 #include <string>
 
 #include "common/rng.h"
+#include "common/validate.h"
 #include "nn/gemm.h"
 #include "rl/ddpg_her_agent.h"
 #include "tools/common/cli.h"
@@ -108,6 +109,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--torch-script", script)->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
+    require_positive(updates, "--updates");
     rl::DdpgHerConfig config;  // batch 256, 3 x 256: the original's
     Rng rng(1);
     rl::DdpgHerAgent agent(config, rng);
