@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "build_info.h"
+#include "common/error.h"
 #include "common/validate.h"
 #include "tools/common/cli.h"
 #include "tools/common/training_json.h"
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
   std::uint64_t first_seed = 0;
   bool quick = false, skip_bc = false, skip_e2e = false, skip_panda = false;
   long long e2e_max_steps = 1'500'000, expert_max_steps = 200'000, hlc_max_steps = 100'000;
-  std::string out_dir = "docs";
+  std::string out_dir = "docs", prefix = "chained";
   tools::ExperimentSettings s;
   app.add_option("--seeds", seeds, "seeds per method")->capture_default_str();
   app.add_option("--first-seed", first_seed)->capture_default_str();
@@ -44,10 +45,26 @@ int main(int argc, char** argv) {
   app.add_flag("--skip-e2e", skip_e2e);
   app.add_flag("--skip-panda", skip_panda,
                "skip the held-out evaluation of a hierarchy trained on panda");
+  app.add_option("--prefix", prefix,
+                 "experts before each trained expert: chained (the learned ones) or scripted "
+                 "(the paper)")
+      ->capture_default_str();
+  s.ddpg.updates_per_transition = 0.5;
+  app.add_option("--updates-per-transition", s.ddpg.updates_per_transition,
+                 "DDPG+HER and BC gradient steps per stored transition (0: the original's 40 "
+                 "per cycle)")
+      ->capture_default_str();
+  double expert_target = 0.95;
+  app.add_option("--expert-target", expert_target,
+                 "task success each subtask expert must reach (twice in a row)")
+      ->capture_default_str();
   app.add_option("--threads", s.threads, "worker threads (0: all cores)");
   app.add_option("--out", out_dir, "where RESULTS.md and results/ go")->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     require_positive(seeds, "--seeds");
+    if (prefix != "chained" && prefix != "scripted")
+      throw_invalid_argument("--prefix", "chained or scripted", "\"" + prefix + "\"");
+    s.chained = prefix == "chained";
     if (quick) {
       seeds = 1;
       e2e_max_steps = std::min(e2e_max_steps, 40'000LL);
@@ -55,7 +72,8 @@ int main(int argc, char** argv) {
       hlc_max_steps = std::min(hlc_max_steps, 20'000LL);
       s.held_out_episodes = 500;
     }
-    s.expert_stop = {expert_max_steps, 0.95, 1000, 100, 2};
+    s.ddpg.validate();
+    s.expert_stop = {expert_max_steps, expert_target, 1000, 100, 2};
     s.hlc_stop = {hlc_max_steps, 0.95, 1000, 100, 2};
     s.e2e_stop = {e2e_max_steps, 0.95, 10'000, 100, 2};
     auto progress = [](const std::string& method, const std::string& role,

@@ -2,8 +2,9 @@
 //   --role approach|manipulate|retract  --algo ddpg_her|bc  (subtask experts)
 //   --role e2e --algo ddpg_her                                (end-to-end baseline)
 //   --role hlc --algo a3c                                     (the choreographer)
-// Writes DIR/<role>.ckpt and DIR/<role>.json.
+// Writes DIR/<role>.ckpt and DIR/<role>.json (role hlc included).
 
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include "common/validate.h"
 #include "nn/checkpoint_io.h"
 #include "rl/a3c_trainer.h"
+#include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/learned_expert.h"
 #include "rl/subtask_trainer.h"
@@ -29,7 +31,7 @@ using namespace pnp;
 struct Options {
   std::string role = "approach", algo = "ddpg_her", robot = "fetch", object = "block",
               out = "runs/latest";
-  std::string init, experts;
+  std::string init, experts, prefix = "scripted";
   std::uint64_t seed = 0;
   bool json = false, quiet = false, scripted_gripper = false;
   std::size_t threads = 0;
@@ -54,6 +56,9 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   app.add_option("--action-l2", o.ddpg.action_l2)->capture_default_str();
   app.add_option("--episodes-per-cycle", o.ddpg.episodes_per_cycle)->capture_default_str();
   app.add_option("--updates-per-cycle", o.ddpg.updates_per_cycle)->capture_default_str();
+  app.add_option("--updates-per-transition", o.ddpg.updates_per_transition,
+                 "> 0: gradient steps per stored transition instead of --updates-per-cycle")
+      ->capture_default_str();
   app.add_flag("--scripted-gripper", o.scripted_gripper,
                "keep the gripper command scripted (paper-faithful)");
   app.add_option("--demo-episodes", o.ddpg.demo_episodes,
@@ -72,6 +77,47 @@ void write_outputs(const Options& o, const std::vector<std::uint8_t>& checkpoint
   const std::string text = summary.dump(2) + "\n";
   nn::write_file_atomically(o.out + "/" + o.role + ".json",
                             {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+}
+
+// An expert for the choreographer or a prefix: "scripted", or a checkpoint path.
+std::unique_ptr<sim::SubtaskPolicy> load_policy(const std::string& spec, const std::string& role,
+                                                const std::string& field) {
+  if (spec == "scripted") return std::make_unique<sim::ScriptedPolicy>();
+  rl::LoadedExpert e = rl::load_expert(nn::read_file(spec));
+  if (e.meta.role != role) {
+    throw_invalid_argument(field, "a " + role + " checkpoint in that position",
+                           "role " + e.meta.role);
+  }
+  return std::make_unique<rl::LearnedExpert>(
+      rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
+      e.meta.learn_gripper);
+}
+
+// The experts before `subtask`: --prefix scripted (the paper), chained (the checkpoints
+// of the earlier roles in --out) or one comma-separated checkpoint or "scripted" each.
+std::vector<std::string> prefix_specs(const Options& o, sim::Subtask subtask) {
+  const auto count = static_cast<std::size_t>(subtask);
+  std::vector<std::string> specs;
+  if (o.prefix == "scripted" || o.prefix == "chained") {
+    for (std::size_t k = 0; k < count; ++k) {
+      specs.push_back(o.prefix == "scripted"
+                          ? "scripted"
+                          : o.out + "/" + std::string(sim::subtask_name(sim::kAllSubtasks[k])) +
+                                ".ckpt");
+    }
+    return specs;
+  }
+  std::stringstream in(o.prefix);
+  for (std::string item; std::getline(in, item, ',');) specs.push_back(item);
+  if (specs.size() != count) {
+    throw_invalid_argument("--prefix",
+                           "scripted, chained, or " + std::to_string(count) +
+                               " comma-separated checkpoints (or \"scripted\") for the subtasks "
+                               "before " +
+                               o.role,
+                           "\"" + o.prefix + "\"");
+  }
+  return specs;
 }
 
 nlohmann::json train_expert(const Options& o) {
@@ -100,6 +146,15 @@ nlohmann::json train_expert(const Options& o) {
   config.stop = o.stop;
   config.threads = o.threads;
   config.init = init ? &*init : nullptr;
+  const std::vector<std::string> prefix =
+      end_to_end ? std::vector<std::string>{} : prefix_specs(o, subtask);
+  std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks> prefix_policies;
+  for (std::size_t k = 0; k < prefix.size(); ++k) {
+    if (prefix[k] == "scripted") continue;
+    prefix_policies[k] =
+        load_policy(prefix[k], std::string(sim::subtask_name(sim::kAllSubtasks[k])), "--prefix");
+    config.prefix[k] = prefix_policies[k].get();
+  }
   const auto output = rl::train_subtask_expert(world, config, [&](const rl::CurvePoint& p) {
     if (!o.quiet) tools::print_progress(stderr, o.role, p);
   });
@@ -126,25 +181,13 @@ nlohmann::json train_expert(const Options& o) {
   summary["config"] = tools::ddpg_config_json(config.ddpg);
   summary["checkpoint"] = o.out + "/" + o.role + ".ckpt";
   if (init) summary["init"] = o.init;
+  if (!end_to_end) summary["prefix"] = prefix;
   write_outputs(
       o,
       rl::save_expert(meta, output.agent->actor(), &output.agent->critic(),
                       output.agent->observation_normalizer(), output.agent->goal_normalizer()),
       summary);
   return summary;
-}
-
-// An expert for the choreographer: "scripted", or a checkpoint path.
-std::unique_ptr<sim::SubtaskPolicy> load_policy(const std::string& spec, const std::string& role) {
-  if (spec == "scripted") return std::make_unique<sim::ScriptedPolicy>();
-  rl::LoadedExpert e = rl::load_expert(nn::read_file(spec));
-  if (e.meta.role != role) {
-    throw_invalid_argument("--experts", "a " + role + " checkpoint in that position",
-                           "role " + e.meta.role);
-  }
-  return std::make_unique<rl::LearnedExpert>(
-      rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
-      e.meta.learn_gripper);
 }
 
 nlohmann::json train_hlc(const Options& o) {
@@ -164,7 +207,8 @@ nlohmann::json train_hlc(const Options& o) {
   }
   std::array<std::unique_ptr<sim::SubtaskPolicy>, 3> experts;
   for (std::size_t k = 0; k < 3; ++k)
-    experts[k] = load_policy(specs[k], std::string(sim::subtask_name(sim::kAllSubtasks[k])));
+    experts[k] =
+        load_policy(specs[k], std::string(sim::subtask_name(sim::kAllSubtasks[k])), "--experts");
   rl::HlcTrainingConfig config;
   config.seed = o.seed;
   config.a3c = o.a3c;
@@ -192,10 +236,15 @@ nlohmann::json train_hlc(const Options& o) {
                        {"max_grad_norm", o.a3c.max_grad_norm},
                        {"trunk", o.a3c.network.trunk},
                        {"lstm", o.a3c.network.lstm}};
-  std::filesystem::create_directories(o.out);
-  const std::string text = summary.dump(2) + "\n";
-  nn::write_file_atomically(o.out + "/hlc.json",
-                            {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+  summary["checkpoint"] = o.out + "/hlc.ckpt";
+  const rl::ChoreographerMeta meta{o.robot,
+                                   o.object,
+                                   o.a3c.network,
+                                   output.result.train_env_steps,
+                                   output.result.final_success,
+                                   o.seed,
+                                   kCodeCommit};
+  write_outputs(o, rl::save_choreographer(meta, *output.net), summary);
   return summary;
 }
 
@@ -222,6 +271,10 @@ int main(int argc, char** argv) {
   app.add_option("--out", o.out, "output directory for checkpoints")->capture_default_str();
   app.add_option("--init", o.init, "checkpoint to fine-tune from");
   app.add_option("--experts", o.experts, "hlc: approach,manipulate,retract checkpoints");
+  app.add_option("--prefix", o.prefix,
+                 "experts before this subtask: scripted, chained (earlier checkpoints in --out) "
+                 "or comma-separated checkpoints")
+      ->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores)");
   app.add_flag("--json", o.json, "print the result as one JSON object");
   app.add_flag("--quiet", o.quiet, "no progress lines on stderr");
@@ -231,6 +284,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hlc-lr", o.a3c.learning_rate)->capture_default_str();
   app.add_option("--entropy", o.a3c.entropy_weight)->capture_default_str();
+  app.add_option("--hlc-gamma", o.a3c.gamma, "hlc: discount per environment step")
+      ->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     nlohmann::json summary;
     const bool expert = o.role == "approach" || o.role == "manipulate" || o.role == "retract";

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -45,12 +46,13 @@ void copy_network(ChoreographerNet& dst, ChoreographerNet& src) {
 // Policy-gradient, entropy and value-loss gradients of one episode, accumulated in net.
 void episode_gradients(ChoreographerNet& net, HlcEpisode& episode, const A3cConfig& c) {
   const std::size_t n = episode.decisions.size();
-  std::vector<double> rewards(n), values(n);
+  std::vector<double> rewards(n), values(n), discounts(n);
   for (std::size_t t = 0; t < n; ++t) {
     rewards[t] = episode.decisions[t].reward;
     values[t] = episode.decisions[t].value;
+    discounts[t] = std::pow(c.gamma, episode.decisions[t].steps);
   }
-  const Advantages adv = compute_gae(rewards, values, 0.0, c.gamma, c.gae_lambda);
+  const Advantages adv = compute_gae(rewards, values, 0.0, discounts, c.gae_lambda);
   std::vector<std::array<double, 3>> dlogits(n);
   std::vector<double> dvalue(n);
   for (std::size_t t = 0; t < n; ++t) {
@@ -128,14 +130,23 @@ void A3cConfig::validate() const {
     throw_invalid_argument("network", "a trunk and an LSTM width", "none");
 }
 
-double evaluate_choreographer(
+std::string choice_string(const HlcEpisode& episode) {
+  static constexpr std::array<char, sim::kNumSubtasks> kLetters{'A', 'M', 'R'};
+  std::string out;
+  for (const HlcDecision& d : episode.decisions)
+    out += kLetters[static_cast<std::size_t>(d.choice)];
+  return out;
+}
+
+ChoreographerEvaluation evaluate_choreographer(
     const std::shared_ptr<const sim::WorldModel>& world, const ChoreographerNet& net,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts, int episodes,
-    std::uint64_t seed, ThreadPool& pool, long long* env_steps) {
+    std::uint64_t seed, ThreadPool& pool) {
   const auto count = static_cast<std::size_t>(episodes);
   const std::size_t workers = std::min(pool.size(), count);
   std::vector<char> success(count, 0);
   std::vector<int> steps(count, 0);
+  std::vector<std::string> choices(count);
   pool.parallel_for(workers, [&](std::size_t w) {
     sim::PickPlaceEnv env(world);
     ChoreographerNet own = net;
@@ -146,13 +157,26 @@ double evaluate_choreographer(
           run_hlc_episode(env, own, raw(own_experts), derive_seed(seed, i), false, unused);
       success[i] = e.success ? 1 : 0;
       steps[i] = e.env_steps;
+      choices[i] = choice_string(e);
     }
   });
-  long long total = 0;
-  for (int s : steps) total += s;
-  if (env_steps) *env_steps += total;
-  return static_cast<double>(std::count(success.begin(), success.end(), 1)) /
-         static_cast<double>(count);
+  ChoreographerEvaluation out;
+  std::map<std::string, ChoreographerEvaluation::Sequence> by_choices;
+  for (std::size_t i = 0; i < count; ++i) {
+    out.env_steps += steps[i];
+    auto& sequence = by_choices[choices[i]];
+    sequence.choices = choices[i];
+    ++sequence.episodes;
+    sequence.successes += success[i];
+  }
+  for (auto& [key, sequence] : by_choices) out.sequences.push_back(sequence);
+  // Most frequent first; ties by the choices, so the order is reproducible.
+  std::sort(out.sequences.begin(), out.sequences.end(), [](const auto& a, const auto& b) {
+    return a.episodes != b.episodes ? a.episodes > b.episodes : a.choices < b.choices;
+  });
+  out.success_rate = static_cast<double>(std::count(success.begin(), success.end(), 1)) /
+                     static_cast<double>(count);
+  return out;
 }
 
 HlcTrainingOutput train_choreographer(
@@ -177,6 +201,7 @@ HlcTrainingOutput train_choreographer(
   StopTracker stop(config.stop);
   TicketGate gate;
   long long next_eval = config.stop.eval_interval_steps;
+  long long sampled_episodes = 0, sampled_successes = 0;  // since the last evaluation
   // Episodes other workers had in flight when training stopped: they ran, so their steps
   // count, though their gradients are never applied. Which episodes these are depends only
   // on the stopping ticket, so the total is reproducible.
@@ -229,13 +254,20 @@ HlcTrainingOutput train_choreographer(
         shared->normalizer().refresh();
         result.train_env_steps += episode.env_steps;
         ++result.train_episodes;
+        ++sampled_episodes;
+        sampled_successes += episode.success ? 1 : 0;
         if (result.train_env_steps >= next_eval) {
           const auto eval_start = Clock::now();
           CurvePoint point;
-          point.task_success =
-              evaluate_choreographer(world, *shared, experts, config.stop.eval_episodes,
-                                     eval_stream, eval_pool, &result.eval_env_steps);
-          point.subtask_success = point.task_success;
+          const ChoreographerEvaluation evaluation = evaluate_choreographer(
+              world, *shared, experts, config.stop.eval_episodes, eval_stream, eval_pool);
+          result.eval_env_steps += evaluation.env_steps;
+          point.task_success = point.subtask_success = evaluation.success_rate;
+          point.sampled_success = static_cast<double>(sampled_successes) /
+                                  static_cast<double>(std::max(1LL, sampled_episodes));
+          sampled_successes = sampled_episodes = 0;
+          const auto& top = evaluation.sequences.front();
+          point.detail = top.choices + " x" + std::to_string(top.episodes);
           result.eval_wall_s += std::chrono::duration<double>(Clock::now() - eval_start).count();
           point.env_steps = result.train_env_steps;
           point.episodes = result.train_episodes;

@@ -10,10 +10,13 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "common/thread_pool.h"
 #include "nn/adam.h"
 #include "rl/choreographer_net.h"
+#include "rl/hlc_episode.h"
 #include "rl/training_progress.h"
 #include "sim/subtask_policy.h"
 #include "sim/world_model.h"
@@ -23,8 +26,10 @@ namespace pnp::rl {
 struct A3cConfig {
   ChoreographerSpec network;
   int workers = 2;
-  double learning_rate = 1e-3;
-  double gamma = 0.99;  // per decision
+  double learning_rate = 3e-3;
+  // Discount per environment step: a decision whose expert ran k steps is discounted
+  // gamma^k (semi-Markov; see rl/gae.h).
+  double gamma = 0.97;
   double gae_lambda = 0.95;
   double entropy_weight = 0.01;
   double value_weight = 0.5;
@@ -50,11 +55,27 @@ HlcTrainingOutput train_choreographer(
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
     const HlcTrainingConfig& config, const ProgressCallback& progress = {});
 
+struct ChoreographerEvaluation {
+  double success_rate = 0;
+  long long env_steps = 0;
+  // The subtask sequences chosen (e.g. "AMR": approach, manipulate, retract), most
+  // frequent first, with their episode counts and successes: what the choreographer does.
+  struct Sequence {
+    std::string choices;
+    int episodes = 0;
+    int successes = 0;
+  };
+  std::vector<Sequence> sequences;
+};
+
 // Greedy evaluation of the choreographer over the experts on episodes seeded
-// derive_seed(seed, i); returns the task success rate.
-double evaluate_choreographer(
+// derive_seed(seed, i).
+ChoreographerEvaluation evaluate_choreographer(
     const std::shared_ptr<const sim::WorldModel>& world, const ChoreographerNet& net,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts, int episodes,
-    std::uint64_t seed, ThreadPool& pool, long long* env_steps);
+    std::uint64_t seed, ThreadPool& pool);
+
+// "AMR" for the choices approach, manipulate, retract.
+std::string choice_string(const HlcEpisode& episode);
 
 }  // namespace pnp::rl

@@ -46,6 +46,9 @@ void DdpgHerConfig::validate() const {
   require(norm_std_floor > 0, "norm_std_floor", "a positive number", norm_std_floor);
   require(episodes_per_cycle > 0, "episodes_per_cycle", "a positive integer", episodes_per_cycle);
   require(updates_per_cycle >= 0, "updates_per_cycle", "a non-negative integer", updates_per_cycle);
+  require(updates_per_transition >= 0 && std::isfinite(updates_per_transition),
+          "updates_per_transition", "a non-negative number (0: updates_per_cycle)",
+          updates_per_transition);
   require(demo_episodes >= 0, "demo_episodes", "a non-negative integer", demo_episodes);
   require(demo_pretrain_updates >= 0, "demo_pretrain_updates", "a non-negative integer",
           demo_pretrain_updates);

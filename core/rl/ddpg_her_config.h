@@ -24,7 +24,12 @@ struct DdpgHerConfig {
   double norm_std_floor = 0.01;
   int episodes_per_cycle = 2;  // rollouts between two rounds of updates
   int updates_per_cycle = 40;  // gradient steps per cycle; targets updated once per cycle
-  bool learn_gripper = true;   // false: the gripper command stays scripted (paper-faithful)
+  // > 0: a cycle's gradient steps are this many per transition it stored instead of
+  // updates_per_cycle (the original's 40 per 2 x 50 steps is 0.4). Subtask segments are
+  // short (an approach ends in ~10 steps), so a fixed 40 per cycle spends several updates
+  // on every new transition, and the wall time with them.
+  double updates_per_transition = 0;
+  bool learn_gripper = true;  // false: the gripper command stays scripted (paper-faithful)
   // Learning from demonstrations: before exploring, run this many scripted episodes of
   // the subtask (their steps count as training steps), store them in the replay, and
   // pretrain the actor on them by behaviour cloning. Without it the untrained actor's

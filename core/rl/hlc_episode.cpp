@@ -2,17 +2,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {
 namespace {
 
-std::array<double, sim::kNumSubtasks> softmax(const std::array<double, sim::kNumSubtasks>& logits) {
-  const double top = *std::max_element(logits.begin(), logits.end());
+// Softmax over the available subtasks; the others get probability 0.
+std::array<double, sim::kNumSubtasks> masked_softmax(
+    const std::array<double, sim::kNumSubtasks>& logits,
+    const std::array<bool, sim::kNumSubtasks>& available) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < logits.size(); ++k)
+    if (available[k]) top = std::max(top, logits[k]);
   std::array<double, sim::kNumSubtasks> p{};
   double sum = 0;
-  for (std::size_t k = 0; k < p.size(); ++k) sum += p[k] = std::exp(logits[k] - top);
+  for (std::size_t k = 0; k < p.size(); ++k)
+    if (available[k]) sum += p[k] = std::exp(logits[k] - top);
   for (double& v : p) v /= sum;
   return p;
 }
@@ -27,6 +34,18 @@ int choose(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng
 }
 
 }  // namespace
+
+std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state) {
+  std::array<bool, sim::kNumSubtasks> out{};
+  bool any = false;
+  for (sim::Subtask s : sim::kAllSubtasks) {
+    const auto k = static_cast<std::size_t>(s);
+    out[k] = !sim::objective_done(sim::objective_of(s), state);
+    any = any || out[k];
+  }
+  if (!any) out.fill(true);  // cannot happen before the object is placed; never choose nothing
+  return out;
+}
 
 HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
@@ -43,7 +62,7 @@ HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
     std::array<double, sim::kNumSubtasks> logits{};
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);
-    d.probabilities = softmax(logits);
+    d.probabilities = masked_softmax(logits, available_subtasks(env.task_state()));
     d.choice = choose(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);

@@ -3,8 +3,9 @@
 // expert runs until its termination predicate fires (after at least one step), its step
 // cap, or the episode's end; then it decides again, until step 50 or until retract ends
 // by its predicate (the object is placed: the arm then idles, gripper closed, to step
-// 50). Any subtask may be picked at any decision. Sparse reward: +1 at the last decision
-// if the task succeeded (object within 0.05 m of the goal at step 50), 0 otherwise.
+// 50). Any subtask whose predicate does not already hold may be picked at any decision. Sparse
+// reward: +1 at the last decision if the task succeeded (object within 0.05 m of the goal at step
+// 50), 0 otherwise.
 
 #include <array>
 #include <cstdint>
@@ -32,6 +33,14 @@ struct HlcEpisode {
   bool success = false;
   int env_steps = 0;
 };
+
+// The subtasks the choreographer may choose from in this state: those whose termination
+// predicate does not already hold (an option is available only where it would not end
+// at once, as in the options framework's initiation sets). Without this the sampled
+// policy spent decisions re-running a finished subtask for one step ("AAR": approach
+// twice, then retract without a grasp), and those episodes' failures were charged to
+// the good first choice. Any order of the remaining subtasks stays possible.
+std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state);
 
 // sample: draw choices from the policy (training); otherwise take the most probable.
 HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,

@@ -1,7 +1,5 @@
 #include "rl/subtask_rollout.h"
 
-#include "sim/scripted_expert.h"
-
 namespace pnp::rl {
 
 sim::Action explore(const sim::Action& action, const ExplorationNoise& noise, Rng& rng) {
@@ -19,18 +17,19 @@ sim::Action explore(const sim::Action& action, const ExplorationNoise& noise, Rn
 }
 
 SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
-                                   sim::SubtaskPolicy& expert, const ExplorationNoise* noise,
-                                   std::uint64_t episode_seed, Rng& noise_rng) {
+                                   const sim::SubtaskPolicies& prefix, sim::SubtaskPolicy& expert,
+                                   const ExplorationNoise* noise, std::uint64_t episode_seed,
+                                   Rng& noise_rng) {
   SubtaskEpisode out;
   env.reset(episode_seed);
-  // Prefix: the scripted experts of the subtasks before this one.
   for (sim::Subtask before : sim::kAllSubtasks) {
     if (before == subtask) break;
+    sim::SubtaskPolicy& policy = *prefix[static_cast<std::size_t>(before)];
     const sim::Objective objective = sim::objective_of(before);
     for (int t = 0; t < sim::step_cap(before) && !env.needs_reset(); ++t) {
       const sim::TaskState state = env.task_state();
-      const auto r = env.step(sim::scripted_action(before, state),
-                              sim::objective_goal(objective, state), objective);
+      const sim::Goal goal = sim::objective_goal(objective, state);
+      const auto r = env.step(policy.act(before, env.observation(), goal, state), goal, objective);
       ++out.prefix_steps;
       if (r.objective_done || r.fault != sim::PhysicsFault::kNone) break;
     }

@@ -1,7 +1,8 @@
 #pragma once
-// One training episode for a subtask expert: the subtasks before it run scripted (the
-// prefix), then the expert acts with exploration until its predicate fires, its step
-// cap, or the episode's end. The segment is what the replay stores; every step taken,
+// One training episode for a subtask expert: the subtasks before it run first (the
+// prefix: scripted experts, or the learned experts it will follow when composed), then
+// the expert acts with exploration until its predicate fires, its step cap, or the
+// episode's end. The segment is what the replay stores; every step taken,
 // prefix included, is counted. The suffix is not run in training: it produces no data
 // for this expert (evaluation runs it).
 
@@ -12,6 +13,7 @@
 #include "rl/ddpg_her_agent.h"
 #include "rl/segment_replay.h"
 #include "sim/pick_place_env.h"
+#include "sim/scripted_pipeline.h"
 #include "sim/subtask_policy.h"
 
 namespace pnp::rl {
@@ -31,10 +33,12 @@ struct SubtaskEpisode {
 };
 
 // The subtask's actions come from `expert` (any policy); exploration noise is added
-// unless `noise` is null (demonstrations).
+// unless `noise` is null (demonstrations). `prefix` runs the subtasks before it (its
+// entries from `subtask` on are not used); the prefix acts without noise.
 SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
-                                   sim::SubtaskPolicy& expert, const ExplorationNoise* noise,
-                                   std::uint64_t episode_seed, Rng& noise_rng);
+                                   const sim::SubtaskPolicies& prefix, sim::SubtaskPolicy& expert,
+                                   const ExplorationNoise* noise, std::uint64_t episode_seed,
+                                   Rng& noise_rng);
 
 // One end-to-end training episode: the policy acts on the episode goal for all 50 steps
 // (objective "task"); the whole episode is one segment.

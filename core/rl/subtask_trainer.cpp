@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "rl/end_to_end_evaluation.h"
 #include "rl/learned_expert.h"
@@ -45,6 +46,34 @@ void label_with_teacher(std::vector<Transition>& segment, sim::Subtask subtask,
   }
 }
 
+// A worker's own copies of the prefix experts (policies are not shared between threads);
+// null entries become the scripted expert.
+class PrefixPolicies {
+ public:
+  explicit PrefixPolicies(const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& prefix) {
+    for (std::size_t k = 0; k < prefix.size(); ++k) {
+      if (prefix[k]) owned_[k] = prefix[k]->clone();
+      policies_[k] = prefix[k] ? owned_[k].get() : &scripted_;
+    }
+  }
+  const sim::SubtaskPolicies& get() const { return policies_; }
+
+ private:
+  sim::ScriptedPolicy scripted_;
+  std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks> owned_;
+  sim::SubtaskPolicies policies_{};
+};
+
+// Gradient steps for a cycle that stored `stored` transitions. Fractions carry over in
+// `credit`, so the long-run ratio is exact.
+int updates_in_cycle(const DdpgHerConfig& c, std::size_t stored, double& credit) {
+  if (c.updates_per_transition <= 0) return c.updates_per_cycle;
+  credit += c.updates_per_transition * static_cast<double>(stored);
+  const double whole = std::floor(credit);
+  credit -= whole;
+  return static_cast<int>(whole);
+}
+
 }  // namespace
 
 SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
@@ -82,6 +111,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   long long next_eval = config.stop.eval_interval_steps;
   double loss_sum_critic = 0, loss_sum_actor = 0;
   long long updates = 0, updates_since_eval = 0;
+  double update_credit = 0;
   const sim::ScriptedPolicy scripted;
 
   // Demonstrations: scripted episodes of this subtask, counted as training episodes,
@@ -96,8 +126,9 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     pool.parallel_for(demos, [&](std::size_t i) {
       sim::PickPlaceEnv env(world);
       sim::ScriptedPolicy teacher;
+      const PrefixPolicies prefix(config.prefix);
       Rng unused(0);
-      demo[i] = run_subtask_episode(env, config.subtask, teacher, nullptr,
+      demo[i] = run_subtask_episode(env, config.subtask, prefix.get(), teacher, nullptr,
                                     derive_seed(episode_stream, i), unused);
     });
     for (const SubtaskEpisode& e : demo) {
@@ -122,6 +153,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     const bool offline = config.algorithm == ExpertAlgorithm::kBcOffline;
     pool.parallel_for(episodes_per_cycle, [&](std::size_t i) {
       sim::ScriptedPolicy teacher;
+      const PrefixPolicies prefix(config.prefix);
       const auto own = learner.clone();
       sim::SubtaskPolicy& actor = offline ? static_cast<sim::SubtaskPolicy&>(teacher) : *own;
       const auto index = static_cast<std::uint64_t>(first_episode) + i;
@@ -131,21 +163,25 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
                                              derive_seed(episode_stream, index), noise_rng);
         return;
       }
-      episodes[i] = run_subtask_episode(envs[i], config.subtask, actor, offline ? nullptr : &noise,
+      episodes[i] = run_subtask_episode(envs[i], config.subtask, prefix.get(), actor,
+                                        offline ? nullptr : &noise,
                                         derive_seed(episode_stream, index), noise_rng);
       if (config.algorithm == ExpertAlgorithm::kBcOnline) {
         label_with_teacher(episodes[i].segment, config.subtask, object_width);
       }
     });
+    std::size_t stored = 0;
     for (const SubtaskEpisode& e : episodes) {
       replay.add_segment(e.segment);
       update_normalizers(*agent, e.segment, objective, object_width);
       result.train_env_steps += e.env_steps;
       ++result.train_episodes;
+      stored += e.segment.size();
     }
     // Updates.
+    const int cycle_updates = updates_in_cycle(config.ddpg, stored, update_credit);
     if (replay.size() > 0) {
-      for (int u = 0; u < config.ddpg.updates_per_cycle; ++u) {
+      for (int u = 0; u < cycle_updates; ++u) {
         if (!ddpg) {  // behaviour cloning: regress the actor on the labelled actions
           replay.sample(config.ddpg.batch_size, 0.0, sample_rng, batch);
           loss_sum_actor += agent->behaviour_clone(batch);
@@ -179,12 +215,19 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     } else {
       std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> experts{&scripted, &scripted,
                                                                        &scripted};
+      for (sim::Subtask before : sim::kAllSubtasks) {
+        const auto k = static_cast<std::size_t>(before);
+        if (before == config.subtask) break;
+        if (config.prefix[k]) experts[k] = config.prefix[k];
+      }
       experts[static_cast<std::size_t>(config.subtask)] = &learned;
       const auto report =
           sim::evaluate_pipeline(world, experts, config.stop.eval_episodes, eval_stream, pool);
       result.eval_env_steps += report.env_steps;
       point.task_success = report.success_rate;
       point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];
+      point.subtask_mean_steps =
+          report.subtask_mean_steps[static_cast<std::size_t>(config.subtask)];
     }
     result.eval_wall_s += seconds_since(eval_start);
     point.env_steps = result.train_env_steps;

@@ -1,10 +1,11 @@
 #pragma once
-// Trains one subtask expert with DDPG+HER: cycles of parallel exploratory episodes (the
-// prefix scripted), stored as segments, followed by gradient updates; at every
-// evaluation interval the expert is evaluated on fresh seeded episodes with scripted
-// experts for the other subtasks (never counted as training steps), until the target is
+// Trains one subtask expert with DDPG+HER: cycles of parallel exploratory episodes (after
+// the prefix), stored as segments, followed by gradient updates; at every evaluation
+// interval the expert is evaluated on fresh seeded episodes after the same prefix and
+// with scripted experts after it (never counted as training steps), until the target is
 // reached twice in a row or the step cap.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -13,6 +14,7 @@
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/training_progress.h"
+#include "sim/subtask_policy.h"
 #include "sim/world_model.h"
 
 namespace pnp::rl {
@@ -33,6 +35,11 @@ struct SubtaskTrainingConfig {
   StopRule stop;
   std::size_t threads = 0;
   const LoadedExpert* init = nullptr;  // fine-tune from this checkpoint
+  // Who runs the subtasks before this one, in training and in evaluation; null entries
+  // (the default) are the scripted experts, as in the paper. Passing the learned experts
+  // already trained ("chained" training) trains each expert on the states it will start
+  // from when the hierarchy runs (docs/LEARNING.md). Entries from `subtask` on are unused.
+  std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> prefix{};
 };
 
 struct SubtaskTrainingOutput {

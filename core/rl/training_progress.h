@@ -4,18 +4,22 @@
 // the target (steps_to_target = the training steps at the first of them) or at the cap.
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace pnp::rl {
 
 struct CurvePoint {
-  long long env_steps = 0;     // training environment steps so far (prefixes included)
-  long long episodes = 0;      // training episodes so far
-  double wall_s = 0;           // since the run started, evaluation included
-  double eval_wall_s = 0;      // of which evaluation, cumulative
-  double task_success = 0;     // object-based, on the fresh evaluation episodes
-  double subtask_success = 0;  // the trained subtask's predicate fired (experts only)
-  double critic_loss = 0;      // mean over the last interval's updates
+  long long env_steps = 0;        // training environment steps so far (prefixes included)
+  long long episodes = 0;         // training episodes so far
+  double wall_s = 0;              // since the run started, evaluation included
+  double eval_wall_s = 0;         // of which evaluation, cumulative
+  double task_success = 0;        // object-based, on the fresh evaluation episodes
+  double subtask_success = 0;     // the trained subtask's predicate fired (experts only)
+  double subtask_mean_steps = 0;  // steps the trained subtask ran, mean (experts only)
+  double sampled_success = 0;     // choreographer: its training episodes (sampled choices)
+  std::string detail;             // choreographer: the most frequent greedy sequence
+  double critic_loss = 0;         // mean over the last interval's updates
   double actor_loss = 0;
   long long updates = 0;
 };

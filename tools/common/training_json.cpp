@@ -10,6 +10,9 @@ nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
                    {"wall_s", p.wall_s},
                    {"task_success", p.task_success},
                    {"subtask_success", p.subtask_success},
+                   {"subtask_mean_steps", p.subtask_mean_steps},
+                   {"sampled_success", p.sampled_success},
+                   {"detail", p.detail},
                    {"critic_loss", p.critic_loss},
                    {"actor_loss", p.actor_loss},
                    {"updates", p.updates}});
@@ -45,6 +48,7 @@ nlohmann::json ddpg_config_json(const rl::DdpgHerConfig& c) {
           {"action_l2", c.action_l2},
           {"episodes_per_cycle", c.episodes_per_cycle},
           {"updates_per_cycle", c.updates_per_cycle},
+          {"updates_per_transition", c.updates_per_transition},
           {"learn_gripper", c.learn_gripper},
           {"demo_episodes", c.demo_episodes},
           {"demo_pretrain_updates", c.demo_pretrain_updates},
@@ -53,11 +57,15 @@ nlohmann::json ddpg_config_json(const rl::DdpgHerConfig& c) {
 }
 
 void print_progress(std::FILE* out, const std::string& role, const rl::CurvePoint& p) {
-  std::fprintf(
-      out,
-      "%-10s steps %7lld  episodes %6lld  success %.2f  subtask %.2f  critic %.4f  wall %6.1fs\n",
-      role.c_str(), p.env_steps, p.episodes, p.task_success, p.subtask_success, p.critic_loss,
-      p.wall_s);
+  std::fprintf(out, "%-10s steps %7lld  episodes %6lld  success %.2f  ", role.c_str(), p.env_steps,
+               p.episodes, p.task_success);
+  if (p.detail.empty()) {  // a subtask expert or end-to-end policy
+    std::fprintf(out, "subtask %.2f (%4.1f steps)  critic %.4f", p.subtask_success,
+                 p.subtask_mean_steps, p.critic_loss);
+  } else {  // the choreographer
+    std::fprintf(out, "sampled %.2f  greedy %s", p.sampled_success, p.detail.c_str());
+  }
+  std::fprintf(out, "  wall %6.1fs\n", p.wall_s);
 }
 
 }  // namespace pnp::tools

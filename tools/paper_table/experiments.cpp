@@ -34,10 +34,14 @@ MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
   for (sim::Subtask subtask : sim::kAllSubtasks) {
     rl::SubtaskTrainingConfig config;
     config.algorithm = algorithm;
+    config.ddpg = s.ddpg;
     config.subtask = subtask;
     config.seed = derive_seed(seed, static_cast<std::uint64_t>(subtask));
     config.stop = s.expert_stop;
     config.threads = s.threads;
+    if (s.chained) {
+      for (std::size_t k = 0; k < experts.size(); ++k) config.prefix[k] = experts[k].get();
+    }
     const std::string role(sim::subtask_name(subtask));
     auto out = rl::train_subtask_expert(
         world, config, [&](const rl::CurvePoint& p) { progress(method, role, p); });
@@ -50,6 +54,7 @@ MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
   rl::HlcTrainingConfig hlc;
   hlc.seed = derive_seed(seed, 3);
   hlc.stop = s.hlc_stop;
+  hlc.a3c = s.a3c;
   hlc.eval_threads = s.threads;
   auto out = rl::train_choreographer(world, prototypes, hlc,
                                      [&](const rl::CurvePoint& p) { progress(method, "hlc", p); });
@@ -57,7 +62,8 @@ MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
     ThreadPool pool(s.threads);
     run.held_out_success =
         rl::evaluate_choreographer(world, *out.net, prototypes, s.held_out_episodes,
-                                   rl::stream_seed(seed, rl::Stream::kHeldOutTest), pool, nullptr);
+                                   rl::stream_seed(seed, rl::Stream::kHeldOutTest), pool)
+            .success_rate;
   }
   add(run, "hlc", std::move(out.result));
   return run;
@@ -69,6 +75,7 @@ MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
   MethodRun run{"e2e", seed, {}, true, 0, 0, -1};
   rl::SubtaskTrainingConfig config;
   config.algorithm = rl::ExpertAlgorithm::kEndToEnd;
+  config.ddpg = s.ddpg;
   config.seed = derive_seed(seed, 4);
   config.stop = s.e2e_stop;
   config.threads = s.threads;

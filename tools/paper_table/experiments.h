@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "rl/a3c_trainer.h"
 #include "rl/subtask_trainer.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
@@ -19,8 +20,13 @@ struct ExperimentSettings {
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
   rl::StopRule expert_stop, hlc_stop, e2e_stop;
+  rl::DdpgHerConfig ddpg;  // experts and the end-to-end baseline (BC uses its schedule)
   std::size_t threads = 0;
   int held_out_episodes = 1000;
+  // Each expert trained after the learned experts before it (true), or after scripted
+  // ones as in the paper (false); see rl::SubtaskTrainingConfig::prefix.
+  bool chained = true;
+  rl::A3cConfig a3c;  // the choreographer
 };
 
 struct RoleRun {

@@ -79,6 +79,22 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       c.command, c.code_commit, c.quick ? "quick" : "full", fmt::join(c.seeds, ", "),
       sim::robot_name(c.settings.robot), sim::object_name(c.settings.object),
       100 * c.settings.expert_stop.target_success, c.settings.expert_stop.eval_episodes);
+  md += fmt::format(
+      "Settings: each subtask expert trained after {} (docs/LEARNING.md), to {:.0f}% task "
+      "success; DDPG+HER {} x {}, batch {}, {}; demonstrations {} episodes; choreographer A3C "
+      "with {} workers, learning rate {}, discount {} per environment step, entropy {}.\n\n",
+      c.settings.chained ? "the learned experts before it (chained)"
+                         : "scripted experts before it (as in the paper)",
+      100 * c.settings.expert_stop.target_success, c.settings.ddpg.hidden.size(),
+      c.settings.ddpg.hidden.empty() ? 0 : c.settings.ddpg.hidden.front(),
+      c.settings.ddpg.batch_size,
+      c.settings.ddpg.updates_per_transition > 0
+          ? fmt::format("{} gradient steps per stored transition",
+                        c.settings.ddpg.updates_per_transition)
+          : fmt::format("{} gradient steps per cycle of {} episodes",
+                        c.settings.ddpg.updates_per_cycle, c.settings.ddpg.episodes_per_cycle),
+      c.settings.ddpg.demo_episodes, c.settings.a3c.workers, c.settings.a3c.learning_rate,
+      c.settings.a3c.gamma, c.settings.a3c.entropy_weight);
   md += "## Steps and time to the target\n\n";
   md +=
       "| method | LSE1 approach | LSE2 manipulate | LSE3 retract | HLC | total steps | total time "
@@ -118,7 +134,8 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
   md += "| BC experts + HLC | 152k | 52k | 168k | 98k | 470k | ~25 min |\n";
   md += "| DDPG+HER experts + HLC | 150k | 30k | 38k | 98k | 316k | ~18 min |\n\n";
   md += fmt::format(
-      "## Final success of each run\n\n| method | seed | reached | final evaluation success | held-out ({} "
+      "## Final success of each run\n\n| method | seed | reached | final evaluation success | "
+      "held-out ({} "
       "episodes) |\n|---|---|---|---|---|\n",
       c.settings.held_out_episodes);
   for (const auto& r : runs) {
@@ -129,8 +146,10 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
         r.held_out_success < 0 ? std::string("-") : fmt::format("{:.3f}", r.held_out_success));
   }
   if (!c.held_out.empty()) {
-    md += fmt::format("\n## Final hierarchy on held-out episodes\n\n| world | task success ({} episodes) |\n|---|---|\n",
-                      c.settings.held_out_episodes);
+    md += fmt::format(
+        "\n## Final hierarchy on held-out episodes\n\n| world | task success ({} episodes) "
+        "|\n|---|---|\n",
+        c.settings.held_out_episodes);
     for (const auto& [world, success] : c.held_out)
       md += fmt::format("| {} | {:.3f} |\n", world, success);
   }

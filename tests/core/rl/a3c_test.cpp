@@ -2,6 +2,8 @@
 
 #include "common/error.h"
 #include "rl/a3c_trainer.h"
+#include "rl/choreographer_checkpoint.h"
+#include "rl/expert_checkpoint.h"
 
 namespace pnp::rl {
 namespace {
@@ -47,6 +49,67 @@ TEST(A3c, RefusesInvalidConfiguration) {
   c = {};
   c.gamma = 1.5;
   EXPECT_THROW(c.validate(), Error);
+}
+
+TEST(ChoreographerCheckpoint, RoundTripGivesIdenticalDecisionsAndCorruptionIsRefused) {
+  ChoreographerNet net({{16, 16}, 4});
+  Rng rng(3);
+  net.initialise(rng);
+  std::vector<double> raw(sim::kObservationSize + sim::kGoalSize, 0.25);
+  net.normalizer().update(raw);
+  net.normalizer().refresh();
+  const ChoreographerMeta meta{"panda", "block", net.spec(), 1234, 0.97, 8, "test"};
+  const auto bytes = save_choreographer(meta, net);
+  LoadedChoreographer loaded = load_choreographer(bytes);
+  EXPECT_EQ(loaded.meta.robot, "panda");
+  EXPECT_EQ(loaded.meta.network, net.spec());
+  EXPECT_EQ(loaded.meta.train_env_steps, 1234);
+
+  // The same two decisions (the LSTM state carries over) from both networks.
+  sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock));
+  env.reset(5);
+  nn::Matrix input;
+  net.encode(env.observation(), env.episode_goal(), env.task_state(), input);
+  net.reset_state();
+  loaded.net.reset_state();
+  for (int decision = 0; decision < 2; ++decision) {
+    DecisionCache ca, cb;
+    std::array<double, 3> la{}, lb{};
+    double va = 0, vb = 0;
+    net.step(input, ca, la, va);
+    loaded.net.step(input, cb, lb, vb);
+    EXPECT_EQ(la, lb);
+    EXPECT_EQ(va, vb);
+  }
+
+  auto corrupted = bytes;
+  corrupted[corrupted.size() / 3] ^= 4;
+  try {
+    load_choreographer(corrupted);
+    FAIL() << "a flipped bit was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
+  }
+  const std::vector<std::uint8_t> truncated(bytes.begin(), bytes.end() - 9);
+  EXPECT_THROW(load_choreographer(truncated), Error);
+}
+
+TEST(ChoreographerCheckpoint, AnExpertCheckpointIsRefusedByKind) {
+  DdpgHerConfig config;
+  config.hidden = {8};
+  Rng rng(1);
+  DdpgHerAgent agent(config, rng);
+  const ExpertMeta meta{"approach", "ddpg_her", "fetch", "block", config.hidden, true, 200, 5,
+                        0.01,       10,         0.5,     1,       "test"};
+  const auto bytes = save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
+                                 agent.goal_normalizer());
+  try {
+    load_choreographer(bytes);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("choreographer"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -33,6 +33,11 @@ TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   c = {};
   c.hidden = {256, 0};
   EXPECT_EQ(refusal(c), "hidden[1]: expected a positive width, got 0");
+  c = {};
+  c.updates_per_transition = -0.4;
+  EXPECT_EQ(refusal(c),
+            "updates_per_transition: expected a non-negative number (0: updates_per_cycle), got "
+            "-0.400000");
 }
 
 TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {

@@ -28,5 +28,24 @@ TEST(Gae, LambdaOneGivesDiscountedReturnsMinusValues) {
   EXPECT_NEAR(a.advantages[2], g2 - 0.3, 1e-12);
 }
 
+TEST(Gae, PerStepDiscountsMatchAHandComputedSemiMarkovCase) {
+  // Decisions that ran 2 and 3 environment steps at gamma 0.9 per step; lambda 1:
+  // returns are r0 + 0.81 (r1 + 0.729 * bootstrap).
+  const std::vector<double> r{0, 1}, v{0.2, 0.4}, discounts{0.81, 0.729};
+  const Advantages a = compute_gae(r, v, 0.5, discounts, 1.0);
+  const double g1 = 1 + 0.729 * 0.5, g0 = 0 + 0.81 * g1;
+  EXPECT_NEAR(a.returns[1], g1, 1e-12);
+  EXPECT_NEAR(a.returns[0], g0, 1e-12);
+  EXPECT_NEAR(a.advantages[0], g0 - 0.2, 1e-12);
+}
+
+TEST(Gae, ConstantDiscountsEqualTheScalarForm) {
+  const std::vector<double> r{0, 0, 1}, v{0.5, 0.6, 0.7}, discounts{0.9, 0.9, 0.9};
+  const Advantages a = compute_gae(r, v, 0.0, discounts, 0.5);
+  const Advantages b = compute_gae(r, v, 0.0, 0.9, 0.5);
+  EXPECT_EQ(a.advantages, b.advantages);
+  EXPECT_EQ(a.returns, b.returns);
+}
+
 }  // namespace
 }  // namespace pnp::rl

@@ -1,0 +1,38 @@
+#include "rl/checkpoint_sections.h"
+
+#include "common/error.h"
+
+namespace pnp::rl {
+
+void write_meta(nn::CheckpointWriter& w, const nlohmann::json& meta) {
+  w.add_text("meta", meta.dump());
+}
+
+nlohmann::json read_meta(const nn::CheckpointReader& r, const std::string& kind) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(r.text("meta"));
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(ErrorCode::kDataLoss, std::string("checkpoint: unreadable metadata: ") + e.what());
+  }
+  const std::string found = j.is_object() ? j.value("kind", "") : "";
+  if (found != kind) throw_invalid_argument("checkpoint kind", kind, "\"" + found + "\"");
+  return j;
+}
+
+void write_normalizer(nn::CheckpointWriter& w, const std::string& name, const nn::Normalizer& n) {
+  w.add_doubles(name + ".sum", n.sums());
+  w.add_doubles(name + ".sumsq", n.sums_of_squares());
+  const double count = n.count();
+  w.add_doubles(name + ".count", std::span<const double>(&count, 1));
+}
+
+void read_normalizer(const nn::CheckpointReader& r, const std::string& name, nn::Normalizer& n) {
+  const std::size_t size = n.sums().size();
+  const auto sums = r.doubles(name + ".sum", size);
+  const auto sumsq = r.doubles(name + ".sumsq", size);
+  const auto count = r.doubles(name + ".count", 1);
+  n.restore(sums, sumsq, count[0]);
+}
+
+}  // namespace pnp::rl

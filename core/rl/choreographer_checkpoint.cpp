@@ -1,0 +1,66 @@
+#include "rl/choreographer_checkpoint.h"
+
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+#include "nn/checkpoint_io.h"
+#include "nn/flat_ops.h"
+#include "rl/checkpoint_sections.h"
+
+namespace pnp::rl {
+namespace {
+
+constexpr const char* kKind = "choreographer";
+
+std::string block_name(std::size_t index) {
+  return "block" + std::to_string(index);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, ChoreographerNet& net) {
+  const nlohmann::json j = {{"kind", kKind},
+                            {"robot", meta.robot},
+                            {"object", meta.object},
+                            {"trunk", meta.network.trunk},
+                            {"lstm", meta.network.lstm},
+                            {"train_env_steps", meta.train_env_steps},
+                            {"eval_success", meta.eval_success},
+                            {"seed", meta.seed},
+                            {"code_commit", meta.code_commit}};
+  nn::CheckpointWriter w;
+  write_meta(w, j);
+  const auto blocks = net.parameter_blocks();
+  for (std::size_t b = 0; b < blocks.size(); ++b) w.add_floats(block_name(b), blocks[b]);
+  write_normalizer(w, "norm", net.normalizer());
+  return w.finish();
+}
+
+LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
+  const nn::CheckpointReader r(bytes);
+  const nlohmann::json j = read_meta(r, kKind);
+  ChoreographerMeta meta = parse_meta(j, [](const nlohmann::json& m) {
+    ChoreographerMeta out;
+    out.robot = m.at("robot");
+    out.object = m.at("object");
+    out.network.trunk = m.at("trunk").get<std::vector<int>>();
+    out.network.lstm = m.at("lstm");
+    out.train_env_steps = m.at("train_env_steps");
+    out.eval_success = m.at("eval_success");
+    out.seed = m.at("seed");
+    out.code_commit = m.value("code_commit", "");
+    return out;
+  });
+  if (meta.network.trunk.empty() || meta.network.lstm <= 0) {
+    throw_invalid_argument("checkpoint network", "a trunk and a positive LSTM width",
+                           "an empty network");
+  }
+  ChoreographerNet net(meta.network);
+  auto blocks = net.parameter_blocks();
+  for (std::size_t b = 0; b < blocks.size(); ++b)
+    nn::copy_into(blocks[b], r.floats(block_name(b), blocks[b].size()));
+  read_normalizer(r, "norm", net.normalizer());
+  return {std::move(meta), std::move(net)};
+}
+
+}  // namespace pnp::rl
