@@ -16,6 +16,10 @@ std::string_view to_string(ErrorCode code) {
       return "RESOURCE_EXHAUSTED";
     case ErrorCode::kDataLoss:
       return "DATA_LOSS";
+    case ErrorCode::kUnavailable:
+      return "UNAVAILABLE";
+    case ErrorCode::kCancelled:
+      return "CANCELLED";
     case ErrorCode::kInternal:
       return "INTERNAL";
   }

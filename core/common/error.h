@@ -15,6 +15,8 @@ enum class ErrorCode {
   kFailedPrecondition,  // right input, wrong state (e.g. step before reset)
   kResourceExhausted,   // a size or count limit
   kDataLoss,            // corrupted or truncated stored data
+  kUnavailable,         // a resource is busy or unreachable: retrying may succeed
+  kCancelled,           // the work was cancelled by its caller
   kInternal,            // a broken invariant inside the core
 };
 

@@ -66,15 +66,6 @@ std::vector<T> decode(std::span<const std::uint8_t> bytes, std::size_t expected,
 
 }  // namespace
 
-std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes) {
-  std::uint64_t h = 0xCBF29CE484222325ULL;
-  for (std::uint8_t b : bytes) {
-    h ^= b;
-    h *= 0x100000001B3ULL;
-  }
-  return h;
-}
-
 void CheckpointWriter::add(const std::string& name, std::span<const std::uint8_t> bytes) {
   sections_.emplace_back(name, std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
 }

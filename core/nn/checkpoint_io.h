@@ -11,11 +11,13 @@
 #include <string_view>
 #include <vector>
 
+#include "common/checksum.h"
+
 namespace pnp::nn {
 
 inline constexpr std::uint32_t kCheckpointFormatVersion = 1;
 
-std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes);
+using pnp::fnv1a64;
 
 class CheckpointWriter {
  public:

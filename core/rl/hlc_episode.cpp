@@ -7,9 +7,7 @@
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {
-namespace {
 
-// Softmax over the available subtasks; the others get probability 0.
 std::array<double, sim::kNumSubtasks> masked_softmax(
     const std::array<double, sim::kNumSubtasks>& logits,
     const std::array<bool, sim::kNumSubtasks>& available) {
@@ -23,6 +21,8 @@ std::array<double, sim::kNumSubtasks> masked_softmax(
   for (double& v : p) v /= sum;
   return p;
 }
+
+namespace {
 
 int choose(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng) {
   if (!sample) return static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());

@@ -42,6 +42,12 @@ struct HlcEpisode {
 // the good first choice. Any order of the remaining subtasks stays possible.
 std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state);
 
+// Softmax of the choreographer's logits over the available subtasks; the others get
+// probability 0.
+std::array<double, sim::kNumSubtasks> masked_softmax(
+    const std::array<double, sim::kNumSubtasks>& logits,
+    const std::array<bool, sim::kNumSubtasks>& available);
+
 // sample: draw choices from the policy (training); otherwise take the most probable.
 HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,

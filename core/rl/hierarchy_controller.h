@@ -1,0 +1,56 @@
+#pragma once
+// The trained hierarchy driven one environment step at a time, for a live episode (the
+// inference service, the robot gateway): the choreographer decides greedily when no
+// subtask is running or the running one has ended (its predicate fired after at least
+// one step, or its step cap), and that subtask's expert produces the action. Once retract
+// has placed the object the arm holds still. Same rule as run_hlc_episode's greedy
+// evaluation, step for step (tested).
+
+#include <array>
+#include <memory>
+#include <optional>
+
+#include "rl/choreographer_net.h"
+#include "sim/subtask_policy.h"
+
+namespace pnp::rl {
+
+class HierarchyController {
+ public:
+  using Experts = std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks>;
+
+  // object_width_m: the extent the fingers close on (the grasp predicate needs it).
+  HierarchyController(ChoreographerNet choreographer, Experts experts, double object_width_m);
+
+  struct Decision {
+    sim::Subtask subtask = sim::Subtask::kApproach;
+    sim::Action action = sim::Action::Zero();
+    double value = 0;  // the choreographer's, at its latest decision
+    std::array<double, sim::kNumSubtasks> probabilities{};
+    bool decided = false;  // the choreographer chose anew at this step
+    bool placed = false;   // retract has placed the object: hold still
+  };
+
+  void reset();  // a new episode
+  // The action for the state after the previous action. Throws INVALID_ARGUMENT for a
+  // non-finite observation or goal (naming it).
+  Decision act(const sim::Observation& observation, const sim::Goal& episode_goal);
+  int steps() const { return steps_; }
+
+ private:
+  bool running_subtask_ended(const sim::TaskState& state) const;
+
+  ChoreographerNet net_;
+  Experts experts_;
+  double object_width_m_;
+  nn::Matrix input_;
+  DecisionCache cache_;
+  std::optional<sim::Subtask> current_;
+  int steps_in_subtask_ = 0;
+  int steps_ = 0;
+  bool placed_ = false;
+  double value_ = 0;
+  std::array<double, sim::kNumSubtasks> probabilities_{};
+};
+
+}  // namespace pnp::rl

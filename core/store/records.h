@@ -1,0 +1,81 @@
+#pragma once
+// What the store keeps: training runs, their learning curves, their checkpoints, and
+// which checkpoint serves each role. Plain values; the store validates them.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pnp::store {
+
+enum class RunState { kPending, kRunning, kSucceeded, kFailed, kCancelled };
+std::string_view run_state_name(RunState state);
+RunState parse_run_state(std::string_view name, std::string_view field = "state");
+bool is_terminal(RunState state);
+
+// The roles a run or a checkpoint can have; anything else is refused.
+inline constexpr std::string_view kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
+bool is_known_role(std::string_view role);
+
+using Millis = std::int64_t;  // Unix time in milliseconds
+
+struct RunSpec {
+  std::string role;       // approach, manipulate, retract, hlc or e2e
+  std::string algorithm;  // ddpg_her, bc, bc_offline, a3c
+  std::string robot, object;
+  std::uint64_t seed = 0;
+  std::string config_json = "{}";  // every hyperparameter, as the trainer received it
+  std::string code_commit;
+  std::optional<std::int64_t> parent_checkpoint_id;  // fine-tuning starts from it
+};
+
+struct RunRecord {
+  std::int64_t id = 0;
+  RunSpec spec;
+  RunState state = RunState::kPending;
+  Millis created_ms = 0, updated_ms = 0;
+  std::optional<Millis> finished_ms;
+  std::string error;  // why it failed, empty otherwise
+  long long env_steps = 0;
+  double last_success = 0;
+  bool reached = false;
+  std::optional<long long> steps_to_target;
+};
+
+struct MetricPoint {
+  long long env_steps = 0;
+  long long episodes = 0;
+  double wall_s = 0;
+  double task_success = 0;
+  double subtask_success = 0;
+  double sampled_success = 0;
+  double critic_loss = 0;
+  double actor_loss = 0;
+  long long updates = 0;
+};
+
+struct CheckpointInfo {
+  std::int64_t id = 0;
+  std::int64_t run_id = 0;
+  std::string role;
+  long long env_steps = 0;
+  double eval_success = 0;
+  std::string checksum;  // FNV-1a 64 of the blob, hex
+  std::int64_t size_bytes = 0;
+  Millis created_ms = 0;
+};
+
+struct Checkpoint {
+  CheckpointInfo info;
+  std::vector<std::uint8_t> blob;  // verified against info.checksum
+};
+
+struct Promotion {
+  std::string role;
+  std::int64_t checkpoint_id = 0;
+  Millis promoted_ms = 0;
+};
+
+}  // namespace pnp::store

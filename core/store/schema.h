@@ -1,0 +1,13 @@
+#pragma once
+// The store's schema as an ordered list of migrations. PRAGMA user_version records how
+// many have run; opening a database runs the missing ones, each in its own transaction,
+// and refuses a database written by a newer version of the code.
+
+#include "store/sqlite.h"
+
+namespace pnp::store {
+
+int schema_version();  // the number of migrations this code knows
+void migrate(Database& db);
+
+}  // namespace pnp::store
