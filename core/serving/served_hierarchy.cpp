@@ -1,0 +1,108 @@
+#include "serving/served_hierarchy.h"
+
+#include "common/error.h"
+#include "rl/learned_expert.h"
+
+namespace pnp::serving {
+namespace {
+
+constexpr std::array<const char*, sim::kNumSubtasks> kExpertRoles{"approach", "manipulate",
+                                                                  "retract"};
+
+}  // namespace
+
+std::optional<ServedIds> ServedHierarchy::promoted_ids(store::RunStore& store) {
+  ServedIds ids;
+  for (std::size_t k = 0; k < kExpertRoles.size(); ++k) {
+    const auto p = store.promoted(kExpertRoles[k]);
+    if (!p) return std::nullopt;
+    ids.experts[k] = p->checkpoint_id;
+  }
+  const auto hlc = store.promoted("hlc");
+  if (!hlc) return std::nullopt;
+  ids.choreographer = hlc->checkpoint_id;
+  return ids;
+}
+
+std::shared_ptr<const ServedHierarchy> ServedHierarchy::load_promoted(store::RunStore& store) {
+  std::string missing;
+  for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
+    if (!store.promoted(role)) missing += (missing.empty() ? "" : ", ") + std::string(role);
+  }
+  if (!missing.empty()) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "no promoted checkpoint for " + missing + ": promote one per role first");
+  }
+  const ServedIds ids = *promoted_ids(store);
+  std::array<rl::LoadedExpert, sim::kNumSubtasks> experts{
+      rl::load_expert(store.load_checkpoint(ids.experts[0]).blob),
+      rl::load_expert(store.load_checkpoint(ids.experts[1]).blob),
+      rl::load_expert(store.load_checkpoint(ids.experts[2]).blob)};
+  auto choreographer = rl::load_choreographer(store.load_checkpoint(ids.choreographer).blob);
+  return std::make_shared<const ServedHierarchy>(std::move(choreographer), std::move(experts), ids);
+}
+
+ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
+                                 std::array<rl::LoadedExpert, sim::kNumSubtasks> experts,
+                                 ServedIds ids)
+    : choreographer_(std::move(choreographer)),
+      experts_(std::move(experts)),
+      ids_(ids),
+      robot_(sim::parse_robot(choreographer_.meta.robot, "choreographer checkpoint robot")),
+      object_(sim::parse_object(choreographer_.meta.object, "choreographer checkpoint object")) {
+  for (std::size_t k = 0; k < experts_.size(); ++k) {
+    const auto& meta = experts_[k].meta;
+    if (meta.role != kExpertRoles[k]) {
+      throw_invalid_argument(std::string(kExpertRoles[k]) + " checkpoint",
+                             std::string("role ") + kExpertRoles[k], "role " + meta.role);
+    }
+    if (meta.robot != choreographer_.meta.robot || meta.object != choreographer_.meta.object) {
+      throw_invalid_argument(std::string(kExpertRoles[k]) + " checkpoint",
+                             "the choreographer's world (" + choreographer_.meta.robot + ", " +
+                                 choreographer_.meta.object + ")",
+                             meta.robot + ", " + meta.object);
+    }
+  }
+  give_back(make_controller());  // fail here, not in the first request, if anything is wrong
+}
+
+std::unique_ptr<rl::HierarchyController> ServedHierarchy::make_controller() const {
+  rl::HierarchyController::Experts experts;
+  for (std::size_t k = 0; k < experts.size(); ++k) {
+    const auto& e = experts_[k];
+    experts[k] = std::make_unique<rl::LearnedExpert>(
+        rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
+        e.meta.learn_gripper);
+  }
+  return std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
+                                                   2 * sim::object_spec(object_).half_width_m);
+}
+
+void ServedHierarchy::give_back(std::unique_ptr<rl::HierarchyController> controller) const {
+  std::lock_guard lock(pool_mutex_);
+  pool_.push_back(std::move(controller));
+}
+
+ServedHierarchy::Lease ServedHierarchy::acquire() const {
+  std::unique_ptr<rl::HierarchyController> controller;
+  {
+    std::lock_guard lock(pool_mutex_);
+    if (!pool_.empty()) {
+      controller = std::move(pool_.back());
+      pool_.pop_back();
+    }
+  }
+  if (!controller) controller = make_controller();
+  controller->reset();
+  return Lease(shared_from_this(), std::move(controller));
+}
+
+ServedHierarchy::Lease::Lease(std::shared_ptr<const ServedHierarchy> owner,
+                              std::unique_ptr<rl::HierarchyController> controller)
+    : owner_(std::move(owner)), controller_(std::move(controller)) {}
+
+ServedHierarchy::Lease::~Lease() {
+  if (owner_ && controller_) owner_->give_back(std::move(controller_));
+}
+
+}  // namespace pnp::serving

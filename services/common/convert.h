@@ -1,0 +1,33 @@
+#pragma once
+// Conversions between the protos of pnp.common.v1 and the core's types. Everything that
+// comes from a client is validated here, at the boundary: wrong sizes, non-finite values
+// and unspecified or unknown enum values are INVALID_ARGUMENT naming the field.
+
+#include <string>
+#include <string_view>
+
+#include "pnp/common/v1/common.pb.h"
+#include "sim/object_shape.h"
+#include "sim/observation.h"
+#include "sim/robot.h"
+#include "sim/subtask.h"
+
+namespace pnp::services {
+
+sim::Robot from_proto(common::v1::Robot robot, std::string_view field);
+sim::ObjectShape from_proto(common::v1::ObjectShape object, std::string_view field);
+common::v1::Robot to_proto(sim::Robot robot);
+common::v1::ObjectShape to_proto(sim::ObjectShape object);
+common::v1::Subtask to_proto(sim::Subtask subtask);
+
+// Role names as the store keeps them ("approach", ..., "hlc", "e2e").
+std::string role_name(common::v1::Role role, std::string_view field);
+common::v1::Role role_from_name(std::string_view name);
+
+sim::Observation from_proto(const common::v1::Observation& o, std::string_view field);
+sim::Goal from_proto(const common::v1::Vector3& v, std::string_view field);
+void to_proto(const sim::Observation& o, common::v1::Observation& out);
+void to_proto(const Eigen::Vector3d& v, common::v1::Vector3& out);
+void to_proto(const sim::Action& a, common::v1::Action& out);
+
+}  // namespace pnp::services

@@ -1,0 +1,72 @@
+#include "services/common/server_runtime.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+
+#include "common/error.h"
+
+namespace pnp::services {
+
+ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(config.address, grpc::InsecureServerCredentials(), &port_);
+  builder.SetMaxReceiveMessageSize(config.max_message_bytes);
+  builder.SetMaxSendMessageSize(config.max_message_bytes);
+  for (grpc::Service* s : config.services) builder.RegisterService(s);
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) {
+    throw Error(ErrorCode::kUnavailable, "cannot listen on " + config.address);
+  }
+  set_serving(true);
+}
+
+void ServerRuntime::set_serving(bool serving) {
+  auto* health = server_->GetHealthCheckService();
+  if (!health) return;
+  health->SetServingStatus(serving);
+  for (const auto& name : names_) health->SetServingStatus(name, serving);
+}
+
+void ServerRuntime::shutdown(std::chrono::milliseconds grace) {
+  set_serving(false);
+  server_->Shutdown(std::chrono::system_clock::now() + grace);
+  server_->Wait();
+}
+
+void block_termination_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
+int wait_for_termination_signal() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  int signal = 0;
+  sigwait(&set, &signal);
+  return signal;
+}
+
+void log_event(std::string_view service, std::string_view event, const nlohmann::json& fields) {
+  nlohmann::json line = {{"ts_ms", std::chrono::duration_cast<std::chrono::milliseconds>(
+                                       std::chrono::system_clock::now().time_since_epoch())
+                                       .count()},
+                         {"service", service},
+                         {"event", event}};
+  for (const auto& [key, value] : fields.items()) line[key] = value;
+  // One stdio call per line: glibc locks the stream per call, so lines never interleave.
+  const std::string text = line.dump() + "\n";
+  std::fputs(text.c_str(), stderr);
+}
+
+}  // namespace pnp::services

@@ -1,0 +1,50 @@
+#pragma once
+// What every pnp server does the same way: listen on an address (port 0 picks a free
+// one), register the standard health service (overall "" and each service name) and
+// server reflection, cap message sizes, log structured JSON lines, and on SIGTERM or
+// SIGINT stop taking new calls, let the running ones finish within a grace period, and
+// exit cleanly.
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pnp::services {
+
+struct ServerConfig {
+  std::string address = "127.0.0.1:0";
+  int max_message_bytes = 4 << 20;
+  std::vector<grpc::Service*> services;
+  std::vector<std::string> service_names;  // full names, for the health service
+};
+
+class ServerRuntime {
+ public:
+  explicit ServerRuntime(const ServerConfig& config);
+  int port() const { return port_; }
+  grpc::Server& server() { return *server_; }
+  void set_serving(bool serving);
+  // Stops accepting calls and waits up to `grace` for running ones (then cancels them).
+  void shutdown(std::chrono::milliseconds grace);
+
+ private:
+  std::unique_ptr<grpc::Server> server_;
+  std::vector<std::string> names_;
+  int port_ = 0;
+};
+
+// Call first in main, before any thread starts: SIGTERM and SIGINT are then delivered
+// only to wait_for_termination_signal().
+void block_termination_signals();
+int wait_for_termination_signal();  // the signal number
+
+// One JSON object per line on stderr: {"ts_ms", "service", "event", ...fields}.
+void log_event(std::string_view service, std::string_view event,
+               const nlohmann::json& fields = nlohmann::json::object());
+
+}  // namespace pnp::services

@@ -1,0 +1,29 @@
+#pragma once
+// The one place core errors become gRPC statuses: every handler runs its body through
+// `guarded`, so a refusal from the core reaches the client as the canonical code with
+// the core's message (which names the field), and nothing escapes as a crash.
+
+#include <grpcpp/grpcpp.h>
+
+#include <exception>
+
+#include "common/error.h"
+
+namespace pnp::services {
+
+grpc::StatusCode status_code(ErrorCode code);
+
+template <typename Body>
+grpc::Status guarded(Body&& body) {
+  try {
+    return body();
+  } catch (const Error& e) {
+    return {status_code(e.code()), e.what()};
+  } catch (const std::bad_alloc&) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory"};
+  } catch (const std::exception& e) {
+    return {grpc::StatusCode::INTERNAL, e.what()};
+  }
+}
+
+}  // namespace pnp::services

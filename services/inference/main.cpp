@@ -1,0 +1,56 @@
+// pnp-inference-server: serves the promoted hierarchy from the store (PolicyService).
+//   --address 127.0.0.1:50054  --db ./pnp.db (or $PNP_DB)  --reload-ms 500
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <thread>
+
+#include "common/error.h"
+#include "services/common/server_runtime.h"
+#include "services/inference/policy_service.h"
+
+int main(int argc, char** argv) {
+  using namespace pnp::services;
+  block_termination_signals();
+  CLI::App app{"Serve the promoted pick-and-place hierarchy", "pnp-inference-server"};
+  std::string address = "127.0.0.1:50054";
+  std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
+  int reload_ms = 500;
+  app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
+      ->capture_default_str();
+  app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
+  app.add_option("--reload-ms", reload_ms, "how often to look for newly promoted checkpoints")
+      ->check(CLI::Range(10, 60'000))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    PolicyServiceImpl service(db);
+    ServerRuntime runtime({address, 4 << 20, {&service}, {"pnp.policy.v1.PolicyService"}});
+    log_event("inference", "listening",
+              {{"port", runtime.port()}, {"db", db}, {"ready", service.ready()}});
+    std::printf("%d\n", runtime.port());  // the port, for scripts that started us on port 0
+    std::fflush(stdout);
+    std::jthread reloader([&](std::stop_token stop) {
+      while (!stop.stop_requested()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(reload_ms));
+        try {
+          if (service.reload()) log_event("inference", "reloaded");
+        } catch (const pnp::Error& e) {
+          if (e.code() != pnp::ErrorCode::kFailedPrecondition)
+            log_event("inference", "reload_failed", {{"error", e.what()}});
+        }
+      }
+    });
+    const int signal = wait_for_termination_signal();
+    log_event("inference", "draining", {{"signal", signal}});
+    reloader.request_stop();
+    runtime.shutdown(std::chrono::seconds(5));
+    log_event("inference", "stopped");
+    return 0;
+  } catch (const pnp::Error& e) {
+    log_event("inference", "fatal", {{"error", e.what()}});
+    return 1;
+  }
+}

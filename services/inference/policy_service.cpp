@@ -1,0 +1,141 @@
+#include "services/inference/policy_service.h"
+
+#include "services/common/convert.h"
+#include "services/common/status.h"
+
+namespace pnp::services {
+namespace {
+
+void fill(const rl::HierarchyController::Decision& d, const serving::ServedHierarchy& served,
+          policy::v1::PredictResponse& out) {
+  out.set_subtask(to_proto(d.subtask));
+  to_proto(d.action, *out.mutable_action());
+  out.set_value(d.value);
+  out.clear_subtask_probabilities();
+  for (double p : d.probabilities) out.add_subtask_probabilities(p);
+  out.set_choreographer_checkpoint_id(served.ids().choreographer);
+  out.set_expert_checkpoint_id(served.ids().experts[static_cast<std::size_t>(d.subtask)]);
+}
+
+}  // namespace
+
+PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path) : store_(db_path) {
+  try {
+    reload();
+  } catch (const Error&) {  // nothing promoted yet: serve once something is
+  }
+}
+
+bool PolicyServiceImpl::reload() {
+  std::lock_guard lock(store_mutex_);
+  const auto ids = serving::ServedHierarchy::promoted_ids(store_);
+  const auto current = served_.load();
+  if (ids && current && current->ids() == *ids) return false;
+  auto next = serving::ServedHierarchy::load_promoted(store_);
+  served_.store(std::move(next));
+  return true;
+}
+
+std::shared_ptr<const serving::ServedHierarchy> PolicyServiceImpl::served_or_unavailable() const {
+  auto served = served_.load();
+  if (!served) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "no hierarchy is served yet: promote an approach, manipulate, retract and hlc "
+                "checkpoint");
+  }
+  return served;
+}
+
+grpc::Status PolicyServiceImpl::Predict(grpc::ServerContext*,
+                                        const policy::v1::PredictRequest* request,
+                                        policy::v1::PredictResponse* response) {
+  return guarded([&] {
+    const sim::Observation observation = from_proto(request->observation(), "observation");
+    const sim::Goal goal = from_proto(request->goal(), "goal");
+    const auto served = served_or_unavailable();
+    auto controller = served->acquire();
+    fill(controller->act(observation, goal), *served, *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status PolicyServiceImpl::PredictSession(
+    grpc::ServerContext* context,
+    grpc::ServerReaderWriter<policy::v1::PredictSessionResponse, policy::v1::PredictSessionRequest>*
+        stream) {
+  return guarded([&] {
+    // The whole episode runs on the hierarchy served when it began.
+    const auto served = served_or_unavailable();
+    auto controller = served->acquire();
+    policy::v1::PredictSessionRequest request;
+    policy::v1::PredictSessionResponse response;
+    while (!context->IsCancelled() && stream->Read(&request)) {
+      const sim::Observation observation = from_proto(request.observation(), "observation");
+      const sim::Goal goal = from_proto(request.goal(), "goal");
+      const auto d = controller->act(observation, goal);
+      fill(d, *served, *response.mutable_prediction());
+      response.set_decided(d.decided);
+      response.set_placed(d.placed);
+      response.set_step(controller->steps());
+      if (!stream->Write(response)) break;
+    }
+    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status PolicyServiceImpl::PromoteCheckpoint(
+    grpc::ServerContext*, const policy::v1::PromoteCheckpointRequest* request,
+    policy::v1::PromoteCheckpointResponse* response) {
+  return guarded([&] {
+    if (request->checkpoint_id() <= 0) {
+      throw_invalid_argument("checkpoint_id", "a positive id",
+                             std::to_string(request->checkpoint_id()));
+    }
+    store::Promotion promotion;
+    {
+      std::lock_guard lock(store_mutex_);
+      promotion = store_.promote(request->checkpoint_id());
+    }
+    response->set_role(role_from_name(promotion.role));
+    response->set_checkpoint_id(promotion.checkpoint_id);
+    // Serve it now if the hierarchy is complete; an incomplete one keeps the old.
+    try {
+      reload();
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kFailedPrecondition) throw;
+    }
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
+                                                 const policy::v1::GetServingStatusRequest*,
+                                                 policy::v1::GetServingStatusResponse* response) {
+  return guarded([&] {
+    std::lock_guard lock(store_mutex_);
+    for (const store::Promotion& p : store_.promotions()) {
+      auto* role = response->add_roles();
+      role->set_role(role_from_name(p.role));
+      role->set_checkpoint_id(p.checkpoint_id);
+      role->mutable_promote_time()->set_seconds(p.promoted_ms / 1000);
+      role->mutable_promote_time()->set_nanos(static_cast<int>(p.promoted_ms % 1000) * 1'000'000);
+    }
+    const auto served = served_.load();
+    response->set_ready(served != nullptr);
+    if (served) {
+      for (auto& role : *response->mutable_roles()) {
+        role.set_robot(to_proto(served->robot()));
+        role.set_object(to_proto(served->object()));
+      }
+    }
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status PolicyServiceImpl::Ping(grpc::ServerContext*, const policy::v1::PingRequest*,
+                                     policy::v1::PingResponse*) {
+  return grpc::Status::OK;
+}
+
+}  // namespace pnp::services
