@@ -16,6 +16,13 @@ void gemm(bool ta, bool tb, float alpha, const float* a, Eigen::Index a_rows, Ei
   } else if (dst.rows() != m || dst.cols() != n) {
     throw_internal("gemm: accumulating into a matrix of the wrong shape");
   }
+  if (n == 1 && !tb && m >= kBlasMinColumns * 16) {
+    // One sample through a wide layer (acting, serving): a matrix-vector product.
+    cblas_sgemv(CblasColMajor, ta ? CblasTrans : CblasNoTrans, static_cast<blasint>(a_rows),
+                static_cast<blasint>(a_cols), alpha, a, static_cast<blasint>(a_rows), b, 1, beta,
+                dst.data(), 1);
+    return;
+  }
   if (n >= kBlasMinColumns || m >= kBlasMinColumns * 16) {
     cblas_sgemm(CblasColMajor, ta ? CblasTrans : CblasNoTrans, tb ? CblasTrans : CblasNoTrans,
                 static_cast<blasint>(m), static_cast<blasint>(n), static_cast<blasint>(k), alpha, a,
