@@ -6,6 +6,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <thread>
 
 #include "common/error.h"
 
@@ -55,6 +56,29 @@ int wait_for_termination_signal() {
   int signal = 0;
   sigwait(&set, &signal);
   return signal;
+}
+
+int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
+                           const std::function<void()>& periodic, std::chrono::milliseconds period,
+                           const nlohmann::json& fields) {
+  nlohmann::json listening = fields;
+  listening["port"] = runtime.port();
+  log_event(service, "listening", listening);
+  std::printf("%d\n", runtime.port());
+  std::fflush(stdout);
+  {
+    std::jthread background([&](std::stop_token stop) {
+      while (!stop.stop_requested()) {
+        std::this_thread::sleep_for(period);
+        periodic();
+      }
+    });
+    const int signal = wait_for_termination_signal();
+    log_event(service, "draining", {{"signal", signal}});
+  }
+  runtime.shutdown(std::chrono::seconds(5));
+  log_event(service, "stopped");
+  return 0;
 }
 
 void log_event(std::string_view service, std::string_view event, const nlohmann::json& fields) {

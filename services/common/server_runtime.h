@@ -8,6 +8,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -42,6 +43,13 @@ class ServerRuntime {
 // only to wait_for_termination_signal().
 void block_termination_signals();
 int wait_for_termination_signal();  // the signal number
+
+// Announces the port (stdout, for scripts that started the server on port 0, and the log),
+// runs `periodic` every `period` on a background thread until SIGTERM or SIGINT, then
+// drains the server (5 s grace) and returns 0.
+int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
+                           const std::function<void()>& periodic, std::chrono::milliseconds period,
+                           const nlohmann::json& fields = nlohmann::json::object());
 
 // One JSON object per line on stderr: {"ts_ms", "service", "event", ...fields}.
 void log_event(std::string_view service, std::string_view event,

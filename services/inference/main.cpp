@@ -3,9 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
-#include <thread>
 
 #include "common/error.h"
 #include "services/common/server_runtime.h"
@@ -28,27 +26,17 @@ int main(int argc, char** argv) {
   try {
     PolicyServiceImpl service(db);
     ServerRuntime runtime({address, 4 << 20, {&service}, {"pnp.policy.v1.PolicyService"}});
-    log_event("inference", "listening",
-              {{"port", runtime.port()}, {"db", db}, {"ready", service.ready()}});
-    std::printf("%d\n", runtime.port());  // the port, for scripts that started us on port 0
-    std::fflush(stdout);
-    std::jthread reloader([&](std::stop_token stop) {
-      while (!stop.stop_requested()) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(reload_ms));
-        try {
-          if (service.reload()) log_event("inference", "reloaded");
-        } catch (const pnp::Error& e) {
-          if (e.code() != pnp::ErrorCode::kFailedPrecondition)
-            log_event("inference", "reload_failed", {{"error", e.what()}});
-        }
-      }
-    });
-    const int signal = wait_for_termination_signal();
-    log_event("inference", "draining", {{"signal", signal}});
-    reloader.request_stop();
-    runtime.shutdown(std::chrono::seconds(5));
-    log_event("inference", "stopped");
-    return 0;
+    return serve_until_terminated(
+        runtime, "inference",
+        [&] {
+          try {
+            if (service.reload()) log_event("inference", "reloaded");
+          } catch (const pnp::Error& e) {
+            if (e.code() != pnp::ErrorCode::kFailedPrecondition)
+              log_event("inference", "reload_failed", {{"error", e.what()}});
+          }
+        },
+        std::chrono::milliseconds(reload_ms), {{"db", db}, {"ready", service.ready()}});
   } catch (const pnp::Error& e) {
     log_event("inference", "fatal", {{"error", e.what()}});
     return 1;

@@ -1,0 +1,91 @@
+#include "services/sim/env_registry.h"
+
+#include "common/error.h"
+#include "common/rng.h"
+
+namespace pnp::services {
+
+void EnvBatch::reset(std::size_t k) {
+  envs[k].reset(derive_seed(derive_seed(seed, k), episodes[k]++));
+}
+
+std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, std::uint64_t seed,
+                                int count, std::chrono::steady_clock::duration idle_timeout) {
+  if (count < 1 || count > kMaxBatch) {
+    throw_invalid_argument("count", "1 to " + std::to_string(kMaxBatch), std::to_string(count));
+  }
+  if (idle_timeout <= std::chrono::steady_clock::duration::zero() ||
+      idle_timeout > kMaxIdleTimeout) {
+    throw_invalid_argument(
+        "idle_timeout", "more than 0 s and at most 3600 s",
+        std::to_string(std::chrono::duration<double>(idle_timeout).count()) + " s");
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (environments_ + count > kMaxEnvironments) {
+      throw Error(ErrorCode::kResourceExhausted,
+                  "count: " + std::to_string(count) + " more environments would exceed the " +
+                      std::to_string(kMaxEnvironments) + " this server holds (" +
+                      std::to_string(environments_) + " open): close some first");
+    }
+    environments_ += count;  // reserved before the (slow) model loading
+  }
+  auto batch = std::make_shared<EnvBatch>();
+  try {
+    batch->world = sim::WorldModel::load(robot, object);
+    batch->seed = seed;
+    for (int k = 0; k < count; ++k) batch->envs.emplace_back(batch->world);
+    batch->episodes.assign(static_cast<std::size_t>(count), 0);
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    environments_ -= count;
+    throw;
+  }
+  batch->idle_timeout = idle_timeout;
+  batch->last_used = std::chrono::steady_clock::now();
+  std::lock_guard lock(mutex_);
+  const std::string id = "env-" + std::to_string(next_id_++);
+  batches_.emplace(id, std::move(batch));
+  return id;
+}
+
+std::shared_ptr<EnvBatch> EnvRegistry::get(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  const auto it = batches_.find(id);
+  if (it == batches_.end())
+    throw Error(ErrorCode::kNotFound,
+                "env_id: no environment batch \"" + id + "\" (closed or expired?)");
+  it->second->last_used = std::chrono::steady_clock::now();
+  return it->second;
+}
+
+void EnvRegistry::close(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  const auto it = batches_.find(id);
+  if (it == batches_.end())
+    throw Error(ErrorCode::kNotFound, "env_id: no environment batch \"" + id + "\"");
+  environments_ -= static_cast<int>(it->second->envs.size());
+  batches_.erase(it);
+}
+
+int EnvRegistry::expire(std::chrono::steady_clock::time_point now) {
+  std::lock_guard lock(mutex_);
+  int closed = 0;
+  for (auto it = batches_.begin(); it != batches_.end();) {
+    if (now - it->second->last_used > it->second->idle_timeout) {
+      environments_ -= static_cast<int>(it->second->envs.size());
+      it = batches_.erase(it);
+      ++closed;
+    } else {
+      ++it;
+    }
+  }
+  return closed;
+}
+
+int EnvRegistry::environments() const {
+  std::lock_guard lock(mutex_);
+  return environments_;
+}
+
+}  // namespace pnp::services

@@ -1,0 +1,56 @@
+#pragma once
+// The simulation service's state: batches of environments by id, each used by one call
+// at a time, closed on request or after their idle timeout. Plain C++ (no gRPC), so it
+// is tested on its own. Ids are "env-<n>" from a counter: nothing here is random.
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "sim/pick_place_env.h"
+#include "sim/world_model.h"
+
+namespace pnp::services {
+
+struct EnvBatch {
+  std::shared_ptr<const sim::WorldModel> world;
+  std::uint64_t seed = 0;
+  std::vector<sim::PickPlaceEnv> envs;
+  std::vector<std::uint64_t> episodes;  // episodes started, per environment
+  std::chrono::steady_clock::duration idle_timeout{};
+  std::chrono::steady_clock::time_point last_used;
+  std::mutex mutex;  // one call at a time per batch
+
+  // Starts the next episode of environment k: seeded from (seed, k, episode number).
+  void reset(std::size_t k);
+};
+
+class EnvRegistry {
+ public:
+  static constexpr int kMaxBatch = 64;
+  static constexpr int kMaxEnvironments = 256;  // over all batches
+  static constexpr std::chrono::seconds kMaxIdleTimeout{3600};
+
+  // Validated: count in [1, 64], idle timeout in (0, 3600 s]; RESOURCE_EXHAUSTED past
+  // 256 environments in all.
+  std::string create(sim::Robot robot, sim::ObjectShape object, std::uint64_t seed, int count,
+                     std::chrono::steady_clock::duration idle_timeout);
+  // NOT_FOUND for an unknown or expired id; marks the batch used.
+  std::shared_ptr<EnvBatch> get(const std::string& id);
+  void close(const std::string& id);  // NOT_FOUND if unknown
+  // Closes batches idle past their timeout; returns how many.
+  int expire(std::chrono::steady_clock::time_point now);
+  int environments() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<EnvBatch>> batches_;
+  std::uint64_t next_id_ = 1;
+  int environments_ = 0;
+};
+
+}  // namespace pnp::services
