@@ -45,4 +45,15 @@ void gemm(bool ta, bool tb, float alpha, const float* a, Eigen::Index a_rows, Ei
     dst.noalias() += alpha * A.transpose() * B.transpose();
 }
 
+void gemm_accumulate(bool ta, bool tb, const float* a, Eigen::Index a_rows, Eigen::Index a_cols,
+                     const float* b, Eigen::Index b_rows, Eigen::Index b_cols, float* dst) {
+  const Eigen::Index m = ta ? a_cols : a_rows, k = ta ? a_rows : a_cols;
+  const Eigen::Index kb = tb ? b_cols : b_rows, n = tb ? b_rows : b_cols;
+  if (k != kb) throw_internal("gemm_accumulate: inner dimensions differ");
+  cblas_sgemm(CblasColMajor, ta ? CblasTrans : CblasNoTrans, tb ? CblasTrans : CblasNoTrans,
+              static_cast<blasint>(m), static_cast<blasint>(n), static_cast<blasint>(k), 1.0f, a,
+              static_cast<blasint>(a_rows), b, static_cast<blasint>(b_rows), 1.0f, dst,
+              static_cast<blasint>(m));
+}
+
 }  // namespace pnp::nn

@@ -117,8 +117,10 @@ void Mlp::backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_
 }
 
 void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> grads_out,
-                        Matrix* dx) const {
+                        Matrix* dx, Eigen::Index weight_columns) const {
   const auto n = layers_.size();
+  const Eigen::Index wc = weight_columns < 0 ? dy.cols() : weight_columns;
+  if (wc > dy.cols()) throw_internal("Mlp::backward_into: more weight columns than samples");
   ws.grad.resize(2);
   Matrix* upstream = &ws.grad[0];
   ensure_shape(*upstream, dy.rows(), dy.cols());
@@ -129,10 +131,11 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
     const Layer& layer = layers_[l];
     const float* w = params_.data() + layer.weight_offset;
     if (!grads_out.empty()) {
-      gemm(false, true, 1.0f, ws.grad_z.data(), ws.grad_z.rows(), ws.grad_z.cols(), input.data(),
-           input.rows(), input.cols(), 0.0f, ws.grad_w);
-      MatrixMap(grads_out.data() + layer.weight_offset, layer.out, layer.in) += ws.grad_w;
-      VectorMap(grads_out.data() + layer.bias_offset, layer.out) += ws.grad_z.rowwise().sum();
+      // Column-major: the first wc samples are the leading wc columns of both.
+      gemm_accumulate(false, true, ws.grad_z.data(), ws.grad_z.rows(), wc, input.data(),
+                      input.rows(), wc, grads_out.data() + layer.weight_offset);
+      VectorMap(grads_out.data() + layer.bias_offset, layer.out) +=
+          ws.grad_z.leftCols(wc).rowwise().sum();
     }
     Matrix* target = l == 0 ? dx : (upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0]);
     if (target) {

@@ -31,7 +31,6 @@ struct MlpWorkspace {
   std::vector<Matrix> post;  // a_l = f(z_l)
   std::vector<Matrix> grad;  // scratch for dL/da and dL/dz
   Matrix grad_z;
-  Matrix grad_w;  // one layer's weight gradient, before accumulation
 };
 
 class Mlp {
@@ -57,8 +56,11 @@ class Mlp {
   void backward(MlpWorkspace& ws, const MatrixRef& dy, bool accumulate_param_grads, Matrix* dx);
   // The same, adding dL/dparams into `grads_out` (same layout as grads(); empty: none),
   // so that several threads can back-propagate through one network at once.
-  void backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> grads_out,
-                     Matrix* dx) const;
+  // weight_columns >= 0: parameter gradients come from the first weight_columns samples
+  // only, while dx covers every sample (one pass serves a loss on the parameters and
+  // another on the inputs, as the DDPG update needs for Q(s, a) and Q(s, pi(s))).
+  void backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> grads_out, Matrix* dx,
+                     Eigen::Index weight_columns = -1) const;
 
   ConstMatrixMap weight(int layer) const;
   ConstVectorMap bias(int layer) const;

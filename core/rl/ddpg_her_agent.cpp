@@ -36,7 +36,7 @@ void normalise_rows(const nn::Normalizer& norm, double clip_raw, const float* ra
 struct DdpgHerAgent::Partition {
   Eigen::Index begin = 0, count = 0;
   nn::Matrix state, next_state, critic_in, next_critic_in, target, dq, dx, da, demo_state, demo_da;
-  nn::MlpWorkspace actor_ws, critic_ws, target_actor_ws, target_critic_ws, critic_pi_ws, demo_ws;
+  nn::MlpWorkspace actor_ws, critic_ws, target_actor_ws, target_critic_ws, demo_ws;
   nn::AlignedFloats actor_grads, critic_grads;
   double critic_loss = 0, q_sum = 0, motion_sq = 0, bc_sq = 0;
 };
@@ -131,55 +131,55 @@ void DdpgHerAgent::normalise_columns(const std::vector<float>& observations,
   }
 }
 
-void DdpgHerAgent::critic_gradient(const SampledBatch& batch, Eigen::Index total,
-                                   Partition& p) const {
-  normalise_columns(batch.observation, batch.goal, p.begin, p.count, p.state);
-  normalise_columns(batch.next_observation, batch.goal, p.begin, p.count, p.next_state);
+void DdpgHerAgent::gradients(const SampledBatch& batch, Eigen::Index total, Partition& p) const {
+  const Eigen::Index c = p.count;
+  normalise_columns(batch.observation, batch.goal, p.begin, c, p.state);
+  normalise_columns(batch.next_observation, batch.goal, p.begin, c, p.next_state);
   // Target: r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0].
   const nn::Matrix& next_action = actor_target_.forward(p.next_state, p.target_actor_ws);
-  nn::ensure_shape(p.next_critic_in, kPolicyInputs + kAct, p.count);
+  nn::ensure_shape(p.next_critic_in, kPolicyInputs + kAct, c);
   p.next_critic_in.topRows(kPolicyInputs) = p.next_state;
   p.next_critic_in.bottomRows(kAct) = next_action;
   const nn::Matrix& next_q = critic_target_.forward(p.next_critic_in, p.target_critic_ws);
-  nn::ensure_shape(p.target, 1, p.count);
+  nn::ensure_shape(p.target, 1, c);
   const auto gamma = static_cast<float>(config_.gamma);
   const auto clip_return = static_cast<float>(-1.0 / (1.0 - config_.gamma));
-  for (Eigen::Index i = 0; i < p.count; ++i) {
+  for (Eigen::Index i = 0; i < c; ++i) {
     const auto k = static_cast<std::size_t>(p.begin + i);
     p.target(0, i) = std::clamp(batch.reward[k] + gamma * (1.0f - batch.done[k]) * next_q(0, i),
                                 clip_return, 0.0f);
   }
-  // Critic: mean squared error over the whole batch.
-  nn::ensure_shape(p.critic_in, kPolicyInputs + kAct, p.count);
-  p.critic_in.topRows(kPolicyInputs) = p.state;
-  for (Eigen::Index i = 0; i < p.count; ++i) {
+  // One critic pass over 2c samples: [s, a] (the critic's loss) then [s, pi(s)] (the
+  // actor's), both with the critic's current parameters, as in the original code, which
+  // computes both losses before applying either step.
+  const nn::Matrix& pi = actor_.forward(p.state, p.actor_ws);
+  nn::ensure_shape(p.critic_in, kPolicyInputs + kAct, 2 * c);
+  p.critic_in.topLeftCorner(kPolicyInputs, c) = p.state;
+  p.critic_in.topRightCorner(kPolicyInputs, c) = p.state;
+  for (Eigen::Index i = 0; i < c; ++i) {
     for (int a = 0; a < kAct; ++a) {
       p.critic_in(kPolicyInputs + a, i) =
           batch.action[static_cast<std::size_t>((p.begin + i) * kAct + a)];
     }
   }
+  p.critic_in.bottomRightCorner(kAct, c) = pi;
   const nn::Matrix& q = critic_.forward(p.critic_in, p.critic_ws);
-  p.dq = (q - p.target) * (2.0f / static_cast<float>(total));
-  p.critic_loss = static_cast<double>((q - p.target).squaredNorm());
+  // Critic: mean squared error over the whole batch. Actor: maximise Q(s, pi(s)).
+  nn::ensure_shape(p.dq, 1, 2 * c);
+  p.dq.leftCols(c) = (q.leftCols(c) - p.target) * (2.0f / static_cast<float>(total));
+  p.dq.rightCols(c).setConstant(-1.0f / static_cast<float>(total));
+  p.critic_loss = static_cast<double>((q.leftCols(c) - p.target).squaredNorm());
+  p.q_sum = static_cast<double>(q.rightCols(c).sum());
   std::fill(p.critic_grads.begin(), p.critic_grads.end(), 0.0f);
-  critic_.backward_into(p.critic_ws, p.dq, p.critic_grads, nullptr);
-}
-
-void DdpgHerAgent::actor_gradient(Eigen::Index total, Partition& p) const {
-  // Maximise Q(s, pi(s)). The L2 penalty applies to the motion (xyz) only: a held grasp
-  // needs a gripper command near -1, and penalising it trained the actor to let go
-  // (measured: retract with a learned gripper stayed under 10% task success).
-  const nn::Matrix& pi = actor_.forward(p.state, p.actor_ws);
-  p.critic_in.bottomRows(kAct) = pi;
-  const nn::Matrix& q_pi = critic_.forward(p.critic_in, p.critic_pi_ws);
-  p.q_sum = static_cast<double>(q_pi.sum());
+  critic_.backward_into(p.critic_ws, p.dq, p.critic_grads, &p.dx, c);
+  // The L2 penalty applies to the motion (xyz) only: a held grasp needs a gripper command
+  // near -1, and penalising it trained the actor to let go (measured: retract with a
+  // learned gripper stayed under 10% task success).
   const auto motion = pi.topRows(3);
   p.motion_sq = static_cast<double>(motion.squaredNorm());
   const auto l2 = static_cast<float>(config_.action_l2);
   const auto motion_size = static_cast<float>(3 * total);
-  p.dq.setConstant(1, p.count, -1.0f / static_cast<float>(total));
-  critic_.backward_into(p.critic_pi_ws, p.dq, {}, &p.dx);  // dQ/d(input) only
-  p.da = p.dx.bottomRows(kAct);
+  p.da = p.dx.bottomRightCorner(kAct, c);
   p.da.topRows(3) += motion * (2.0f * l2 / motion_size);
   std::fill(p.actor_grads.begin(), p.actor_grads.end(), 0.0f);
   actor_.backward_into(p.actor_ws, p.da, p.actor_grads, nullptr);
@@ -218,13 +218,9 @@ UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* 
     std::tie(parts_[static_cast<std::size_t>(k)].begin, parts_[static_cast<std::size_t>(k)].count) =
         columns(k, n);
 
-  pool_.parallel_for(parts_.size(), [&](std::size_t k) { critic_gradient(batch, n, parts_[k]); });
-  sum_gradients(critic_, false);
-  critic_adam_.step(critic_.params(), critic_.grads());
-
   pool_.parallel_for(parts_.size(), [&](std::size_t k) {
     Partition& p = parts_[k];
-    actor_gradient(n, p);
+    gradients(batch, n, p);
     p.bc_sq = 0;
     if (with_demos) {
       const auto [begin, count] = columns(static_cast<int>(k), demo_n);
@@ -232,6 +228,8 @@ UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* 
           bc_gradient(*demos, begin, count, demo_n, static_cast<float>(config_.demo_bc_weight), p);
     }
   });
+  sum_gradients(critic_, false);
+  critic_adam_.step(critic_.params(), critic_.grads());
   sum_gradients(actor_, true);
   actor_adam_.step(actor_.params(), actor_.grads());
 

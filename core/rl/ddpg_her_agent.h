@@ -100,8 +100,8 @@ class DdpgHerAgent {
   // Normalised [observation; goal] of columns [begin, begin + count) of a batch.
   void normalise_columns(const std::vector<float>& observations, const std::vector<float>& goals,
                          Eigen::Index begin, Eigen::Index count, nn::Matrix& states) const;
-  void critic_gradient(const SampledBatch& batch, Eigen::Index total, Partition& p) const;
-  void actor_gradient(Eigen::Index total, Partition& p) const;
+  // Both gradients of one partition from one critic pass over [Q(s, a) | Q(s, pi(s))].
+  void gradients(const SampledBatch& batch, Eigen::Index total, Partition& p) const;
   // Adds weight x the BC gradient of columns [begin, begin + count) of `demos` (mean over
   // `total` samples) to p.actor_grads; returns that part's squared-error sum.
   double bc_gradient(const SampledBatch& demos, Eigen::Index begin, Eigen::Index count,

@@ -104,6 +104,36 @@ TEST(Mlp, SteadyBatchDoesNotReallocate) {
   EXPECT_EQ(ws.post[0].data(), before);
 }
 
+// One pass over [A | B] with weight_columns = |A|: parameter gradients of A alone, input
+// gradients of both (the DDPG update's merged critic pass).
+TEST(Mlp, WeightColumnsLimitParameterGradientsButNotInputGradients) {
+  Rng rng(9);
+  Mlp net({5, {8, 8}, 1, Activation::kReLU, Activation::kNone});
+  net.initialise(rng);
+  Matrix x(5, 6), dy(1, 6);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x.data()[i] = static_cast<float>(rng.normal());
+  for (Eigen::Index i = 0; i < dy.size(); ++i) dy.data()[i] = static_cast<float>(rng.normal());
+
+  MlpWorkspace merged;
+  net.forward(x, merged);
+  AlignedFloats merged_grads(net.params().size(), 0.0f);
+  Matrix merged_dx;
+  net.backward_into(merged, dy, merged_grads, &merged_dx, 4);
+
+  MlpWorkspace first;
+  net.forward(x.leftCols(4), first);
+  AlignedFloats first_grads(net.params().size(), 0.0f);
+  net.backward_into(first, dy.leftCols(4), first_grads, nullptr);
+  MlpWorkspace all;
+  net.forward(x, all);
+  Matrix all_dx;
+  net.backward_into(all, dy, {}, &all_dx);
+
+  for (std::size_t k = 0; k < first_grads.size(); ++k)
+    EXPECT_NEAR(merged_grads[k], first_grads[k], 1e-5f) << k;
+  EXPECT_TRUE(merged_dx.isApprox(all_dx, 1e-6f));
+}
+
 TEST(Mlp, RefusesBadShapes) {
   EXPECT_THROW(Mlp({0, {4}, 2}), Error);
   EXPECT_THROW(Mlp({3, {4, -1}, 2}), Error);
