@@ -4,6 +4,7 @@
 // OpenBLAS, best of 1 and 2 threads), and the fraction of this machine's measured
 // single-thread GEMM peak the update reaches.
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -99,10 +100,12 @@ nlohmann::json run_torch_peer(const std::string& python, const std::string& scri
 
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark DDPG+HER updates against PyTorch", "pnp-bench-update"};
-  int updates = 200;
+  int updates = 200, rounds = 3;
   bool json = false, skip_torch = false;
   std::string python = "/usr/bin/python3", script = PNP_TORCH_PEER_SCRIPT;
   app.add_option("--updates", updates, "timed updates")->capture_default_str();
+  app.add_option("--rounds", rounds, "alternating rounds of ours and the peer; best kept")
+      ->capture_default_str();
   app.add_flag("--json", json);
   app.add_flag("--no-torch", skip_torch, "skip the PyTorch peer");
   app.add_option("--python", python, "interpreter with Debian's python3-torch")
@@ -110,22 +113,38 @@ int main(int argc, char** argv) {
   app.add_option("--torch-script", script)->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     require_positive(updates, "--updates");
+    require_positive(rounds, "--rounds");
     rl::DdpgHerConfig config;  // batch 256, 3 x 256: the original's
     Rng rng(1);
     rl::DdpgHerAgent agent(config, rng);
     const rl::SampledBatch batch = random_batch(config.batch_size, rng);
     for (int i = 0; i < 20; ++i) agent.update(batch);  // warm-up
-    const auto t0 = Clock::now();
-    for (int i = 0; i < updates; ++i) {
-      agent.update(batch);
-      agent.update_targets();
+    // Rounds alternate ours and the peer, each side's best round kept: this machine is
+    // shared, and load that comes and goes then hits both sides alike.
+    double ups = 0;
+    nlohmann::json torch_best;
+    for (int round = 0; round < rounds; ++round) {
+      const auto t0 = Clock::now();
+      for (int i = 0; i < updates; ++i) {
+        agent.update(batch);
+        agent.update_targets();
+      }
+      ups = std::max(ups, updates / std::chrono::duration<double>(Clock::now() - t0).count());
+      if (skip_torch) continue;
+      const nlohmann::json torch = run_torch_peer(python, script, updates);
+      if (!torch.contains("updates_per_s")) {
+        torch_best = torch;  // the error, reported below
+        break;
+      }
+      if (torch_best.empty() ||
+          torch["updates_per_s"].get<double>() > torch_best["updates_per_s"].get<double>())
+        torch_best = torch;
     }
-    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double ups = updates / seconds;
     const double peak = gemm_peak_gflops();
     const double gflops = update_flops(config) * ups / 1e9;
     nlohmann::json out = {{"updates_per_s", ups},
                           {"ms_per_update", 1000.0 / ups},
+                          {"rounds", rounds},
                           {"update_gflop", update_flops(config) / 1e9},
                           {"achieved_gflops", gflops},
                           {"gemm_peak_gflops_1_thread", peak},
@@ -133,11 +152,10 @@ int main(int argc, char** argv) {
                           // The update runs its two batch halves on two cores.
                           {"fraction_of_gemm_peak", gflops / (peak * rl::kUpdatePartitions)}};
     if (!skip_torch) {
-      const nlohmann::json torch = run_torch_peer(python, script, updates);
-      out["torch"] = torch;
-      if (torch.contains("updates_per_s")) {
-        out["torch_updates_per_s"] = torch["updates_per_s"];
-        out["ratio"] = ups / torch["updates_per_s"].get<double>();
+      out["torch"] = torch_best;
+      if (torch_best.contains("updates_per_s")) {
+        out["torch_updates_per_s"] = torch_best["updates_per_s"];
+        out["ratio"] = ups / torch_best["updates_per_s"].get<double>();
       }
     }
     std::cout << (json ? out.dump() : out.dump(2)) << "\n";

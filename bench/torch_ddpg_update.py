@@ -45,14 +45,19 @@ def run(updates, threads):
         with torch.no_grad():
             q_next = critic_t(torch.cat([s2, actor_t(s2)], 1))
             y = torch.clamp(r + GAMMA * (1 - done) * q_next, -1 / (1 - GAMMA), 0)
+        # Both losses with the critic's current parameters, then both steps (as the
+        # original code and pnp's update do); autograd.grad computes only the gradients
+        # asked for, so the actor's loss back-propagates through the critic's inputs only.
         critic_loss = ((critic(torch.cat([s, a], 1)) - y) ** 2).mean()
-        critic_opt.zero_grad()
-        critic_loss.backward()
-        critic_opt.step()
         pi = actor(s)
         actor_loss = -critic(torch.cat([s, pi], 1)).mean() + L2 * (pi[:, :3] ** 2).mean()
-        actor_opt.zero_grad()
-        actor_loss.backward()
+        critic_grads = torch.autograd.grad(critic_loss, list(critic.parameters()))
+        actor_grads = torch.autograd.grad(actor_loss, list(actor.parameters()))
+        for p, g in zip(critic.parameters(), critic_grads):
+            p.grad = g
+        for p, g in zip(actor.parameters(), actor_grads):
+            p.grad = g
+        critic_opt.step()
         actor_opt.step()
         with torch.no_grad():
             for net, target in ((actor, actor_t), (critic, critic_t)):
