@@ -65,6 +65,8 @@ int main(int argc, char** argv) {
     if (prefix != "chained" && prefix != "scripted")
       throw_invalid_argument("--prefix", "chained or scripted", "\"" + prefix + "\"");
     s.chained = prefix == "chained";
+    if (!(expert_target > 0 && expert_target <= 1))
+      throw_invalid_argument("--expert-target", "a value in (0, 1]", std::to_string(expert_target));
     if (quick) {
       seeds = 1;
       e2e_max_steps = std::min(e2e_max_steps, 40'000LL);

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 
 #include "rl/end_to_end_evaluation.h"
 #include "rl/learned_expert.h"
 #include "rl/seed_streams.h"
 #include "rl/subtask_rollout.h"
+#include "rl/update_schedule.h"
 #include "sim/scripted_evaluation.h"
 #include "sim/scripted_expert.h"
 
@@ -64,16 +64,6 @@ class PrefixPolicies {
   sim::SubtaskPolicies policies_{};
 };
 
-// Gradient steps for a cycle that stored `stored` transitions. Fractions carry over in
-// `credit`, so the long-run ratio is exact.
-int updates_in_cycle(const DdpgHerConfig& c, std::size_t stored, double& credit) {
-  if (c.updates_per_transition <= 0) return c.updates_per_cycle;
-  credit += c.updates_per_transition * static_cast<double>(stored);
-  const double whole = std::floor(credit);
-  credit -= whole;
-  return static_cast<int>(whole);
-}
-
 }  // namespace
 
 SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
@@ -111,7 +101,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   long long next_eval = config.stop.eval_interval_steps;
   double loss_sum_critic = 0, loss_sum_actor = 0;
   long long updates = 0, updates_since_eval = 0;
-  double update_credit = 0;
+  UpdateSchedule schedule(config.ddpg);
   const sim::ScriptedPolicy scripted;
 
   // Demonstrations: scripted episodes of this subtask, counted as training episodes,
@@ -179,7 +169,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
       stored += e.segment.size();
     }
     // Updates.
-    const int cycle_updates = updates_in_cycle(config.ddpg, stored, update_credit);
+    const int cycle_updates = schedule.updates_for(stored);
     if (replay.size() > 0) {
       for (int u = 0; u < cycle_updates; ++u) {
         if (!ddpg) {  // behaviour cloning: regress the actor on the labelled actions

@@ -4,6 +4,7 @@
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/subtask_trainer.h"
+#include "rl/update_schedule.h"
 
 namespace pnp::rl {
 namespace {
@@ -192,6 +193,30 @@ TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
   }
   EXPECT_TRUE(std::equal(a.agent->actor().params().begin(), a.agent->actor().params().end(),
                          b.agent->actor().params().begin()));
+}
+
+}  // namespace
+}  // namespace pnp::rl
+
+namespace pnp::rl {
+namespace {
+
+TEST(UpdateSchedule, FixedPerCycleByDefault) {
+  UpdateSchedule schedule{DdpgHerConfig{}};
+  EXPECT_EQ(schedule.updates_for(7), 40);
+  EXPECT_EQ(schedule.updates_for(100), 40);
+}
+
+TEST(UpdateSchedule, PerTransitionCarriesFractionsSoTheRatioIsExact) {
+  DdpgHerConfig c;
+  c.updates_per_transition = 0.5;
+  UpdateSchedule schedule(c);
+  EXPECT_EQ(schedule.updates_for(7), 3);  // 3.5: the half carries over
+  EXPECT_EQ(schedule.updates_for(7), 4);  // 0.5 + 3.5
+  int total = 0;
+  for (int cycle = 0; cycle < 100; ++cycle) total += schedule.updates_for(13);
+  EXPECT_EQ(total, 650);
+  EXPECT_EQ(schedule.updates_for(0), 0);
 }
 
 }  // namespace

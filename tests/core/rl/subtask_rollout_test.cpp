@@ -87,5 +87,12 @@ TEST(HlcOptions, ASubtaskWhosePredicateHoldsCannotBeChosen) {
   EXPECT_EQ(available_subtasks(env.task_state()), (std::array<bool, 3>{false, true, true}));
 }
 
+TEST(HlcOptions, UnavailableSubtasksGetZeroProbabilityAndTheRestSumToOne) {
+  const auto p = masked_softmax({5.0, 1.0, 1.0}, {false, true, true});
+  EXPECT_EQ(p[0], 0.0) << "the largest logit is masked out";
+  EXPECT_NEAR(p[1], 0.5, 1e-12);
+  EXPECT_NEAR(p[1] + p[2], 1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace pnp::rl
