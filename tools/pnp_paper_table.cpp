@@ -13,7 +13,7 @@
 #include "common/error.h"
 #include "common/validate.h"
 #include "tools/common/cli.h"
-#include "tools/common/training_json.h"
+#include "tools/common/progress_line.h"
 #include "tools/paper_table/report.h"
 
 namespace {

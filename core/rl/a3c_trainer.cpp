@@ -189,6 +189,13 @@ HlcTrainingOutput train_choreographer(
   auto shared = std::make_unique<ChoreographerNet>(config.a3c.network);
   Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
   shared->initialise(init_rng);
+  if (config.init) {
+    if (!(config.init->spec() == config.a3c.network)) {
+      throw_invalid_argument("init", "a choreographer of the configured network shape",
+                             "another shape");
+    }
+    *shared = *config.init;
+  }
   std::vector<nn::Adam> adams;  // one per parameter block, shared by all workers
   for (auto block : shared->parameter_blocks())
     adams.emplace_back(block.size(), nn::AdamConfig{config.a3c.learning_rate});
@@ -199,13 +206,24 @@ HlcTrainingOutput train_choreographer(
 
   TrainingResult result;
   StopTracker stop(config.stop);
+  const auto& resumed = config.control.resume_curve;
+  const double wall_offset = resumed.empty() ? 0.0 : resumed.back().wall_s;
+  if (stop.resume(
+          resumed, [](const CurvePoint& p) { return p.task_success; }, result)) {
+    result.wall_s = wall_offset;
+    return {std::move(result), std::move(shared)};
+  }
+  // Tickets continue after a resumed run's episodes, so its new episodes are new seeds.
+  const long long first_ticket = result.train_episodes;
   TicketGate gate;
   long long next_eval = config.stop.eval_interval_steps;
+  while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
   long long sampled_episodes = 0, sampled_successes = 0;  // since the last evaluation
   // Episodes other workers had in flight when training stopped: they ran, so their steps
   // count, though their gradients are never applied. Which episodes these are depends only
   // on the stopping ticket, so the total is reproducible.
   std::atomic<long long> in_flight_steps{0};
+  bool cancelled = false;  // written under the gate's turn
   std::exception_ptr failure;
   std::mutex failure_mutex;
   const auto workers = static_cast<long long>(config.a3c.workers);
@@ -220,13 +238,17 @@ HlcTrainingOutput train_choreographer(
       Experts own = clone_experts(experts);
       for (long long k = 0;; ++k) {
         const long long ticket = k * workers + w;
-        Rng choice_rng(derive_seed(choice_stream, static_cast<std::uint64_t>(ticket)));
+        const auto episode_index = static_cast<std::uint64_t>(first_ticket + ticket);
+        Rng choice_rng(derive_seed(choice_stream, episode_index));
         HlcEpisode episode = run_hlc_episode(
-            env, local, raw(own), derive_seed(episode_stream, static_cast<std::uint64_t>(ticket)),
-            true, choice_rng);
+            env, local, raw(own), derive_seed(episode_stream, episode_index), true, choice_rng);
         local.zero_grads();
         episode_gradients(local, episode, config.a3c);
         gate.wait_for(ticket);
+        if (!gate.stopped() && config.control.stop.stop_requested()) {
+          cancelled = true;
+          gate.stop();
+        }
         if (gate.stopped()) {
           in_flight_steps += episode.env_steps;
           return;
@@ -271,11 +293,12 @@ HlcTrainingOutput train_choreographer(
           result.eval_wall_s += std::chrono::duration<double>(Clock::now() - eval_start).count();
           point.env_steps = result.train_env_steps;
           point.episodes = result.train_episodes;
-          point.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
-          point.updates = ticket + 1;
+          point.wall_s = wall_offset + std::chrono::duration<double>(Clock::now() - start).count();
+          point.updates = first_ticket + ticket + 1;
           point.eval_wall_s = result.eval_wall_s;
           while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
           const bool finished = stop.record(point, point.task_success, result);
+          if (config.on_evaluation) config.on_evaluation(point, *shared);
           if (progress) progress(point);
           if (finished) {
             gate.stop();
@@ -297,7 +320,8 @@ HlcTrainingOutput train_choreographer(
   }
   if (failure) std::rethrow_exception(failure);
   result.train_env_steps += in_flight_steps.load();
-  result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  result.cancelled = cancelled;
+  result.wall_s = wall_offset + std::chrono::duration<double>(Clock::now() - start).count();
   return {std::move(result), std::move(shared)};
 }
 

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,13 @@ struct HlcTrainingConfig {
   A3cConfig a3c;
   StopRule stop;
   std::size_t eval_threads = 0;
+  // Start from these parameters (fine-tuning, or resuming with control.resume_curve)
+  // instead of a fresh initialisation; the network shape must match a3c.network.
+  const ChoreographerNet* init = nullptr;
+  TrainingControl control;
+  // Called after every evaluation with the shared network as evaluated (to checkpoint it),
+  // before the progress callback; no gradient is applied while it runs.
+  std::function<void(const CurvePoint&, ChoreographerNet&)> on_evaluation;
 };
 
 struct HlcTrainingOutput {

@@ -66,6 +66,17 @@ class PrefixPolicies {
 
 }  // namespace
 
+double expert_stop_score(const CurvePoint& point, sim::Subtask subtask, bool end_to_end) {
+  // Approach and manipulate must also do their own subtask: the scripted experts after
+  // them can recover from a poor one (a manipulate that never closes is rescued by the
+  // retract closing the gripper), so task success alone would credit an expert that
+  // only runs out its step cap. Nothing follows retract, and its predicate is a
+  // stricter tolerance (0.01 m) of what task success measures (0.05 m).
+  return end_to_end || subtask == sim::Subtask::kRetract
+             ? point.task_success
+             : std::min(point.task_success, point.subtask_success);
+}
+
 SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
                                            const SubtaskTrainingConfig& config,
                                            const ProgressCallback& progress) {
@@ -96,9 +107,19 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
 
   TrainingResult result;
   StopTracker stop(config.stop);
+  const auto& resumed = config.control.resume_curve;
+  const double wall_offset = resumed.empty() ? 0.0 : resumed.back().wall_s;
+  if (stop.resume(
+          resumed,
+          [&](const CurvePoint& p) { return expert_stop_score(p, config.subtask, end_to_end); },
+          result)) {
+    result.wall_s = wall_offset;
+    return {std::move(result), std::move(agent)};
+  }
   SampledBatch batch;
   std::vector<SubtaskEpisode> episodes(episodes_per_cycle);
   long long next_eval = config.stop.eval_interval_steps;
+  while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
   double loss_sum_critic = 0, loss_sum_actor = 0;
   long long updates = 0, updates_since_eval = 0;
   UpdateSchedule schedule(config.ddpg);
@@ -110,7 +131,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   const bool ddpg = config.algorithm == ExpertAlgorithm::kDdpgHer || end_to_end;
   SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
   SampledBatch demo_batch;
-  if (ddpg && !end_to_end && config.ddpg.demo_episodes > 0 && !config.init) {
+  if (ddpg && !end_to_end && config.ddpg.demo_episodes > 0 && !config.init && resumed.empty()) {
     const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
     std::vector<SubtaskEpisode> demo(demos);
     pool.parallel_for(demos, [&](std::size_t i) {
@@ -136,6 +157,10 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   }
 
   for (;;) {
+    if (config.control.stop.stop_requested()) {
+      result.cancelled = true;
+      break;
+    }
     // Rollouts: one episode per environment, in parallel; each episode's environment
     // and noise seeds depend only on its index, so any thread count gives the same data.
     const LearnedExpert learner(agent->snapshot(), config.ddpg.learn_gripper);
@@ -222,7 +247,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     result.eval_wall_s += seconds_since(eval_start);
     point.env_steps = result.train_env_steps;
     point.episodes = result.train_episodes;
-    point.wall_s = seconds_since(start);
+    point.wall_s = wall_offset + seconds_since(start);
     point.eval_wall_s = result.eval_wall_s;
     point.critic_loss =
         updates_since_eval ? loss_sum_critic / static_cast<double>(updates_since_eval) : 0;
@@ -232,19 +257,13 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     loss_sum_critic = loss_sum_actor = 0;
     updates_since_eval = 0;
     while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
-    // Approach and manipulate must also do their own subtask: the scripted experts after
-    // them can recover from a poor one (a manipulate that never closes is rescued by the
-    // retract closing the gripper), so task success alone would credit an expert that
-    // only runs out its step cap. Nothing follows retract, and its predicate is a
-    // stricter tolerance (0.01 m) of what task success measures (0.05 m).
-    const double score = end_to_end || config.subtask == sim::Subtask::kRetract
-                             ? point.task_success
-                             : std::min(point.task_success, point.subtask_success);
-    const bool done = stop.record(point, score, result);
+    const bool done =
+        stop.record(point, expert_stop_score(point, config.subtask, end_to_end), result);
+    if (config.on_evaluation) config.on_evaluation(point, *agent);
     if (progress) progress(point);
     if (done) break;
   }
-  result.wall_s = seconds_since(start);
+  result.wall_s = wall_offset + seconds_since(start);
   return {std::move(result), std::move(agent)};
 }
 

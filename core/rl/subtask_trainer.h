@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 
@@ -40,7 +41,15 @@ struct SubtaskTrainingConfig {
   // already trained ("chained" training) trains each expert on the states it will start
   // from when the hierarchy runs (docs/LEARNING.md). Entries from `subtask` on are unused.
   std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> prefix{};
+  TrainingControl control;
+  // Called after every evaluation with the agent as evaluated (to checkpoint it), before
+  // the progress callback.
+  std::function<void(const CurvePoint&, const DdpgHerAgent&)> on_evaluation;
 };
+
+// What the stop rule scores for an expert: approach and manipulate must also do their own
+// subtask (see subtask_trainer.cpp); retract and end-to-end are judged on the task.
+double expert_stop_score(const CurvePoint& point, sim::Subtask subtask, bool end_to_end);
 
 struct SubtaskTrainingOutput {
   TrainingResult result;

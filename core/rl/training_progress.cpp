@@ -39,9 +39,18 @@ bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& 
   return point.env_steps >= rule_.max_steps;
 }
 
-}  // namespace pnp::rl
-
-namespace pnp::rl {
+bool StopTracker::resume(const std::vector<CurvePoint>& curve,
+                         const std::function<double(const CurvePoint&)>& score,
+                         TrainingResult& result) {
+  bool done = false;
+  for (const CurvePoint& point : curve) done = record(point, score(point), result);
+  if (!curve.empty()) {
+    result.train_env_steps = curve.back().env_steps;
+    result.train_episodes = curve.back().episodes;
+    result.eval_wall_s = curve.back().eval_wall_s;
+  }
+  return done;
+}
 
 double wall_to_target(const TrainingResult& result) {
   for (const CurvePoint& p : result.curve) {

@@ -4,6 +4,7 @@
 // the target (steps_to_target = the training steps at the first of them) or at the cap.
 
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,7 @@ double wall_to_target(const TrainingResult& result);
 
 struct TrainingResult {
   bool reached = false;
+  bool cancelled = false;          // stopped by TrainingControl::stop before its rule
   long long steps_to_target = -1;  // -1: not reached
   double final_success = 0;        // last evaluation
   long long train_env_steps = 0;
@@ -50,10 +52,28 @@ struct TrainingResult {
   std::vector<CurvePoint> curve;
 };
 
+// What a caller outside the trainer controls: cancellation, and resuming a run that was
+// interrupted (by a crash or a restart) from its last checkpoint.
+struct TrainingControl {
+  // Checked between rounds of rollouts and updates; a stopped run returns at once with
+  // `cancelled` set and the result so far.
+  std::stop_token stop;
+  // Non-empty: the interrupted run's learning curve up to its last checkpoint (whose
+  // weights the caller passes as the trainer's init). Step and episode counters continue
+  // from its last point, the stop rule's streak is rebuilt from it, and new training
+  // episodes continue the run's seed sequence. The replay buffer and optimiser moments
+  // are not checkpointed: they refill and re-adapt (docs/LEARNING.md).
+  std::vector<CurvePoint> resume_curve;
+};
+
 // Tracks consecutive successes; returns true when training should stop.
 class StopTracker {
  public:
   explicit StopTracker(const StopRule& rule) : rule_(rule) {}
+  // Replays a resumed run's curve; `score` maps a point to what must reach the target.
+  // Returns true if that curve already met the stop rule.
+  bool resume(const std::vector<CurvePoint>& curve,
+              const std::function<double(const CurvePoint&)>& score, TrainingResult& result);
   // `score` is what must reach the target (task success, or for a subtask expert the
   // lower of task and subtask success).
   bool record(const CurvePoint& point, double score, TrainingResult& result);

@@ -150,6 +150,23 @@ RunRecord RunStore::set_state(std::int64_t id, RunState state, const std::string
 void RunStore::record_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
                              std::optional<long long> steps_to_target) {
   Transaction tx(db_);
+  insert_metric(run_id, p, reached, steps_to_target);
+  tx.commit();
+}
+
+CheckpointInfo RunStore::record_evaluation(std::int64_t run_id, const MetricPoint& point,
+                                           std::span<const std::uint8_t> blob, bool reached,
+                                           std::optional<long long> steps_to_target) {
+  if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
+  Transaction tx(db_);
+  insert_metric(run_id, point, reached, steps_to_target);
+  const std::int64_t id = insert_checkpoint(run_id, point.env_steps, point.task_success, blob);
+  tx.commit();
+  return checkpoint_info(id);
+}
+
+void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
+                             std::optional<long long> steps_to_target) {
   const RunRecord run = get_run(run_id);
   if (is_terminal(run.state)) {
     throw Error(ErrorCode::kFailedPrecondition, "run " + std::to_string(run_id) + " is " +
@@ -182,7 +199,6 @@ void RunStore::record_metric(std::int64_t run_id, const MetricPoint& p, bool rea
       .bind(5, now_ms())
       .bind(6, run_id);
   update.run();
-  tx.commit();
 }
 
 std::vector<MetricPoint> RunStore::metrics(std::int64_t run_id) {
@@ -204,6 +220,13 @@ CheckpointInfo RunStore::save_checkpoint(std::int64_t run_id, long long env_step
                                          double eval_success, std::span<const std::uint8_t> blob) {
   if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   Transaction tx(db_);
+  const std::int64_t id = insert_checkpoint(run_id, env_steps, eval_success, blob);
+  tx.commit();
+  return checkpoint_info(id);
+}
+
+std::int64_t RunStore::insert_checkpoint(std::int64_t run_id, long long env_steps,
+                                         double eval_success, std::span<const std::uint8_t> blob) {
   const RunRecord run = get_run(run_id);
   auto st = db_.prepare(
       "INSERT INTO checkpoints (run_id, role, env_steps, eval_success, checksum, size_bytes, "
@@ -217,9 +240,7 @@ CheckpointInfo RunStore::save_checkpoint(std::int64_t run_id, long long env_step
       .bind_blob(7, blob)
       .bind(8, now_ms());
   st.run();
-  const std::int64_t id = db_.last_insert_id();
-  tx.commit();
-  return checkpoint_info(id);
+  return db_.last_insert_id();
 }
 
 CheckpointInfo RunStore::checkpoint_info(std::int64_t checkpoint_id) {

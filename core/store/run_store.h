@@ -45,6 +45,11 @@ class RunStore {
 
   CheckpointInfo save_checkpoint(std::int64_t run_id, long long env_steps, double eval_success,
                                  std::span<const std::uint8_t> blob);
+  // An evaluation and the checkpoint it evaluated, in one transaction: a resumed run finds
+  // its curve and its weights at the same step.
+  CheckpointInfo record_evaluation(std::int64_t run_id, const MetricPoint& point,
+                                   std::span<const std::uint8_t> blob, bool reached,
+                                   std::optional<long long> steps_to_target);
   Checkpoint load_checkpoint(std::int64_t checkpoint_id);  // verified, or DATA_LOSS
   std::optional<CheckpointInfo> latest_checkpoint(std::int64_t run_id);
   std::vector<CheckpointInfo> checkpoints(std::int64_t run_id);
@@ -58,6 +63,10 @@ class RunStore {
 
  private:
   CheckpointInfo checkpoint_info(std::int64_t checkpoint_id);
+  void insert_metric(std::int64_t run_id, const MetricPoint& point, bool reached,
+                     std::optional<long long> steps_to_target);
+  std::int64_t insert_checkpoint(std::int64_t run_id, long long env_steps, double eval_success,
+                                 std::span<const std::uint8_t> blob);
   Database db_;
 };
 

@@ -1,0 +1,46 @@
+#pragma once
+// Trains one role from a TrainingSpec and checkpoint bytes, and returns its result and
+// final checkpoint: the one entry point shared by the local tool (files) and the training
+// service (the store). It knows nothing of where checkpoints live.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rl/training_progress.h"
+#include "sim/subtask.h"
+#include "training/training_spec.h"
+
+namespace pnp::training {
+
+using Blob = std::vector<std::uint8_t>;
+
+// Checkpoints a run starts from. An empty blob is the scripted expert.
+struct TrainingInputs {
+  Blob init;  // fine-tune (or resume) from this checkpoint of the same role; empty: fresh
+  // Experts: who runs the subtasks before this one (entries from the role on are unused).
+  // The choreographer: the three experts it sequences.
+  std::array<Blob, sim::kNumSubtasks> experts;
+};
+
+struct TrainingHooks {
+  std::size_t threads = 0;  // rollout and evaluation threads (0: all cores); no effect on results
+  rl::TrainingControl control;
+  // After every evaluation: the point and the checkpoint of the weights it evaluated.
+  std::function<void(const rl::CurvePoint&, const Blob&)> on_evaluation;
+  rl::ProgressCallback progress;
+};
+
+struct TrainingOutcome {
+  rl::TrainingResult result;
+  Blob checkpoint;  // the final weights
+};
+
+// Throws INVALID_ARGUMENT for an invalid spec or a checkpoint of the wrong role or shape,
+// DATA_LOSS for a corrupted one.
+TrainingOutcome train_role(const TrainingSpec& spec, const TrainingInputs& inputs,
+                           const TrainingHooks& hooks, const std::string& code_commit);
+
+}  // namespace pnp::training

@@ -1,0 +1,36 @@
+#include "training/training_json.h"
+
+namespace pnp::training {
+
+nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& p : curve) {
+    out.push_back({{"env_steps", p.env_steps},
+                   {"episodes", p.episodes},
+                   {"wall_s", p.wall_s},
+                   {"task_success", p.task_success},
+                   {"subtask_success", p.subtask_success},
+                   {"subtask_mean_steps", p.subtask_mean_steps},
+                   {"sampled_success", p.sampled_success},
+                   {"detail", p.detail},
+                   {"critic_loss", p.critic_loss},
+                   {"actor_loss", p.actor_loss},
+                   {"updates", p.updates}});
+  }
+  return out;
+}
+
+nlohmann::json result_json(const rl::TrainingResult& r) {
+  return {
+      {"reached", r.reached},
+      {"steps_to_target", r.reached ? nlohmann::json(r.steps_to_target) : nlohmann::json(nullptr)},
+      {"final_success", r.final_success},
+      {"train_env_steps", r.train_env_steps},
+      {"train_episodes", r.train_episodes},
+      {"eval_steps", r.eval_env_steps},
+      {"wall_s", r.wall_s},
+      {"eval_wall_s", r.eval_wall_s},
+      {"curve", curve_json(r.curve)}};
+}
+
+}  // namespace pnp::training

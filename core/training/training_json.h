@@ -1,0 +1,14 @@
+#pragma once
+// A training result and its learning curve as JSON (pnp-train --json, run summaries).
+
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "rl/training_progress.h"
+
+namespace pnp::training {
+
+nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve);
+nlohmann::json result_json(const rl::TrainingResult& result);
+
+}  // namespace pnp::training

@@ -1,0 +1,53 @@
+// pnp-train-server: trains one role (TrainingService) in the background, writing runs,
+// learning curves and checkpoints to the store; resumes interrupted runs at start.
+//   --role approach  --address 127.0.0.1:50052  --db ./pnp.db (or $PNP_DB)  --threads 0
+
+#include <CLI/CLI.hpp>
+#include <cstdlib>
+#include <map>
+#include <optional>
+
+#include "build_info.h"
+#include "common/error.h"
+#include "services/common/server_runtime.h"
+#include "services/train/training_service.h"
+
+int main(int argc, char** argv) {
+  using namespace pnp::services;
+  block_termination_signals();
+  CLI::App app{"Train one role of the pick-and-place hierarchy as a service", "pnp-train-server"};
+  // Conventional ports, one per role (deploy/ uses the same).
+  const std::map<std::string, int> default_ports{{"approach", 50052},
+                                                 {"manipulate", 50053},
+                                                 {"retract", 50054},
+                                                 {"hlc", 50055},
+                                                 {"e2e", 50056}};
+  std::string role, address;
+  std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
+  std::size_t threads = 0;
+  app.add_option("--role", role, "approach, manipulate, retract, hlc or e2e")->required();
+  app.add_option("--address", address,
+                 "host:port to listen on (port 0: any free port) [127.0.0.1:5005x by role]");
+  app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
+  app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const auto port = default_ports.find(role);
+  if (port == default_ports.end()) {
+    std::fprintf(stderr,
+                 "--role: expected one of approach, manipulate, retract, hlc, e2e, got \"%s\"\n",
+                 role.c_str());
+    return 2;
+  }
+  if (address.empty()) address = "127.0.0.1:" + std::to_string(port->second);
+  const std::string name = "train-" + role;
+  try {
+    pnp::training::RunManager manager({db, role, std::string(pnp::kCodeCommit), threads});
+    TrainingServiceImpl service(manager);
+    ServerRuntime runtime({address, 4 << 20, {&service}, {"pnp.train.v1.TrainingService"}});
+    return serve_until_terminated(runtime, name, [] {}, std::chrono::milliseconds(1000),
+                                  {{"db", db}, {"role", role}});
+  } catch (const pnp::Error& e) {
+    log_event(name, "fatal", {{"error", e.what()}});
+    return 1;
+  }
+}

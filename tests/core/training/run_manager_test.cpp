@@ -1,0 +1,168 @@
+// RunManager: runs train in the background against a real store; refusals store nothing;
+// cancellation; a run interrupted by a shutdown resumes from its last checkpoint with its
+// learning curve intact.
+#include "training/run_manager.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "common/error.h"
+#include "tests/core/training/small_runs.h"
+#include "training/training_spec.h"
+
+namespace pnp::training {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ScratchDir;
+using testing::small_spec;
+
+::testing::AssertionResult throws_code(const std::function<void()>& f, ErrorCode code,
+                                       const std::string& text) {
+  try {
+    f();
+  } catch (const Error& e) {
+    if (e.code() == code && std::string(e.what()).find(text) != std::string::npos)
+      return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "threw " << to_string(e.code()) << ": " << e.what();
+  }
+  return ::testing::AssertionFailure() << "did not throw";
+}
+
+// Waits (without a time limit of its own: ctest's applies) until `done` holds.
+template <typename Done>
+void wait_until(RunManager& manager, Done done) {
+  std::uint64_t seen = manager.generation();
+  while (!done()) seen = manager.wait_for_change(seen, 100ms);
+}
+
+TEST(TrainingSpecJson, RoundTripsEveryField) {
+  TrainingSpec spec = small_spec("retract");
+  spec.robot = sim::Robot::kPanda;
+  spec.object = sim::ObjectShape::kCylinder;
+  spec.scripted_gripper = true;
+  spec.ddpg.polyak = 0.9;
+  spec.a3c.entropy_weight = 0.02;
+  const TrainingSpec back = spec_from_json(to_json(spec));
+  EXPECT_EQ(to_json(back), to_json(spec));
+  EXPECT_EQ(back.robot, sim::Robot::kPanda);
+  EXPECT_EQ(back.ddpg.hidden, (std::vector<int>{32, 32}));
+}
+
+TEST(TrainingSpecJson, RefusesAWrongType) {
+  EXPECT_TRUE(throws_code(
+      [] {
+        spec_from_json({{"stop", {{"max_steps", "many"}}}});
+      },
+      ErrorCode::kInvalidArgument, "stop.max_steps"));
+}
+
+TEST(RunManager, TrainsARunToItsCapRecordingEveryEvaluationWithItsCheckpoint) {
+  ScratchDir dir("run_manager_trains");
+  RunManager manager({dir.file("pnp.db"), "approach", "test", 2});
+  const auto created = manager.create(small_spec(), {});
+  EXPECT_EQ(created.state, store::RunState::kPending);
+  wait_until(manager, [&] { return store::is_terminal(manager.get(created.id).state); });
+  const auto run = manager.get(created.id);
+  ASSERT_EQ(run.state, store::RunState::kSucceeded) << run.error;
+  const auto metrics = manager.metrics(run.id);
+  const auto checkpoints = manager.checkpoints(run.id);
+  ASSERT_GE(metrics.size(), 3u);  // at 200, 400 and 600 steps (or past them)
+  ASSERT_EQ(checkpoints.size(), metrics.size());
+  for (std::size_t i = 0; i < metrics.size(); ++i)
+    EXPECT_EQ(checkpoints[i].env_steps, metrics[i].env_steps);
+  EXPECT_GE(run.env_steps, 600);
+  EXPECT_EQ(run.spec.code_commit, "test");
+}
+
+TEST(RunManager, RefusalsStoreNothing) {
+  ScratchDir dir("run_manager_refusals");
+  RunManager manager({dir.file("pnp.db"), "manipulate", "test", 1});
+  TrainingSpec wrong_role = small_spec("approach");
+  EXPECT_TRUE(throws_code([&] { manager.create(wrong_role, {}); }, ErrorCode::kInvalidArgument,
+                          "role: expected \"manipulate\""));
+  TrainingSpec bad_lr = small_spec("manipulate");
+  bad_lr.ddpg.actor_learning_rate = -1;
+  EXPECT_TRUE(throws_code([&] { manager.create(bad_lr, {}); }, ErrorCode::kInvalidArgument,
+                          "actor_learning_rate"));
+  EXPECT_TRUE(throws_code(
+      [&] {
+        manager.create(small_spec("manipulate"), {42, {}});
+      },
+      ErrorCode::kNotFound, "checkpoint 42"));
+  EXPECT_TRUE(throws_code(
+      [&] {
+        manager.create(small_spec("manipulate"), {std::nullopt, {1, 2}});
+      },
+      ErrorCode::kInvalidArgument, "prefix_checkpoint_ids"));
+  EXPECT_TRUE(manager.list({}).empty());
+}
+
+TEST(RunManager, ChoreographerNeedsPromotedExperts) {
+  ScratchDir dir("run_manager_hlc");
+  RunManager manager({dir.file("pnp.db"), "hlc", "test", 1});
+  EXPECT_TRUE(throws_code([&] { manager.create(small_spec("hlc"), {}); },
+                          ErrorCode::kFailedPrecondition, "no promoted approach checkpoint"));
+  EXPECT_TRUE(manager.list({}).empty());
+}
+
+TEST(RunManager, CancelsARunningRunAndRefusesToCancelItTwice) {
+  ScratchDir dir("run_manager_cancel");
+  RunManager manager({dir.file("pnp.db"), "approach", "test", 1});
+  const auto run = manager.create(small_spec("approach", 1'000'000), {});
+  wait_until(manager, [&] { return manager.get(run.id).state == store::RunState::kRunning; });
+  manager.cancel(run.id);
+  wait_until(manager, [&] { return store::is_terminal(manager.get(run.id).state); });
+  EXPECT_EQ(manager.get(run.id).state, store::RunState::kCancelled);
+  EXPECT_TRUE(throws_code([&] { manager.cancel(run.id); }, ErrorCode::kFailedPrecondition,
+                          "already finished"));
+}
+
+TEST(RunManager, CancelsAPendingRunBehindARunningOne) {
+  ScratchDir dir("run_manager_cancel_pending");
+  RunManager manager({dir.file("pnp.db"), "approach", "test", 1});
+  const auto first = manager.create(small_spec("approach", 1'000'000), {});
+  const auto second = manager.create(small_spec(), {});
+  EXPECT_EQ(manager.cancel(second.id).state, store::RunState::kCancelled);
+  manager.cancel(first.id);
+  wait_until(manager, [&] { return store::is_terminal(manager.get(first.id).state); });
+  EXPECT_TRUE(manager.metrics(second.id).empty());
+}
+
+TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
+  ScratchDir dir("run_manager_resume");
+  const std::string db = dir.file("pnp.db");
+  std::int64_t id = 0;
+  std::vector<store::MetricPoint> before;
+  {
+    RunManager first({db, "approach", "test", 1});
+    id = first.create(small_spec("approach", 1200), {}).id;
+    wait_until(first, [&] { return first.metrics(id).size() >= 2; });
+  }  // shut down mid-run
+  {
+    store::RunStore store(db);
+    EXPECT_EQ(store.get_run(id).state, store::RunState::kRunning);
+    before = store.metrics(id);
+  }
+  ASSERT_GE(before.size(), 2u);
+  RunManager second({db, "approach", "test", 1});
+  wait_until(second, [&] { return store::is_terminal(second.get(id).state); });
+  const auto run = second.get(id);
+  ASSERT_EQ(run.state, store::RunState::kSucceeded) << run.error;
+  const auto after = second.metrics(id);
+  ASSERT_GT(after.size(), before.size());
+  for (std::size_t i = 0; i < before.size(); ++i) {  // the curve so far is intact
+    EXPECT_EQ(after[i].env_steps, before[i].env_steps);
+    EXPECT_EQ(after[i].task_success, before[i].task_success);
+    EXPECT_EQ(after[i].episodes, before[i].episodes);
+  }
+  EXPECT_GT(after.back().env_steps, before.back().env_steps);
+  EXPECT_GE(after.back().env_steps, 1200);
+  // It continued from its last checkpoint, not from scratch: episodes keep counting.
+  EXPECT_GT(after[before.size()].episodes, before.back().episodes);
+}
+
+}  // namespace
+}  // namespace pnp::training
