@@ -220,6 +220,19 @@ std::optional<double> RunManager::eta_s(std::int64_t run_id) const {
   return static_cast<double>(std::max(0LL, active_->max_steps - active_->steps)) / rate;
 }
 
+RunManager::Load RunManager::load() const {
+  std::lock_guard lock(mutex_);
+  Load load;
+  load.queued = queue_.size();
+  if (!active_) return load;
+  load.active = active_->run_id;
+  load.active_env_steps = active_->steps;
+  const double elapsed = std::chrono::duration<double>(Clock::now() - active_->started).count();
+  if (active_->steps > active_->start_steps && elapsed > 0)
+    load.active_steps_per_s = static_cast<double>(active_->steps - active_->start_steps) / elapsed;
+  return load;
+}
+
 std::uint64_t RunManager::generation() const {
   std::lock_guard lock(mutex_);
   return generation_;

@@ -69,6 +69,15 @@ class RunManager {
   // it reaches its target); empty unless it is training now and has a rate.
   std::optional<double> eta_s(std::int64_t run_id) const;
 
+  // What the worker is doing now, for monitoring (Prometheus gauges in the service).
+  struct Load {
+    std::size_t queued = 0;              // runs waiting behind the active one
+    std::optional<std::int64_t> active;  // the run training now
+    long long active_env_steps = 0;      // its training env steps so far
+    double active_steps_per_s = 0;       // since it (re)started; 0 before its first report
+  };
+  Load load() const;
+
   // A counter bumped at every change to any run; wait_for_change returns when it differs
   // from `seen` or after `timeout`, with its current value.
   std::uint64_t generation() const;

@@ -9,10 +9,16 @@
 #include <thread>
 
 #include "common/error.h"
+#include "services/common/rpc_metrics.h"
 
 namespace pnp::services {
 
 ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
+  if (config.metrics == nullptr && !config.metrics_address.empty())
+    throw_invalid_argument("metrics", "a registry to serve on " + config.metrics_address, "none");
+  // Before gRPC starts: a metrics port that cannot listen fails the server whole.
+  if (!config.metrics_address.empty())
+    metrics_http_ = std::make_unique<MetricsHttpServer>(config.metrics_address, *config.metrics);
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
@@ -20,6 +26,11 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   for (grpc::Service* s : config.services) builder.RegisterService(s);
+  if (config.metrics != nullptr) {
+    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
+    creators.push_back(make_rpc_metrics_factory(*config.metrics));
+    builder.experimental().SetInterceptorCreators(std::move(creators));
+  }
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
     throw Error(ErrorCode::kUnavailable, "cannot listen on " + config.address);
@@ -63,6 +74,7 @@ int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
                            const nlohmann::json& fields) {
   nlohmann::json listening = fields;
   listening["port"] = runtime.port();
+  if (runtime.metrics_port() != 0) listening["metrics_port"] = runtime.metrics_port();
   log_event(service, "listening", listening);
   std::printf("%d\n", runtime.port());
   std::fflush(stdout);

@@ -1,9 +1,10 @@
 #pragma once
 // What every pnp server does the same way: listen on an address (port 0 picks a free
 // one), register the standard health service (overall "" and each service name) and
-// server reflection, cap message sizes, log structured JSON lines, and on SIGTERM or
-// SIGINT stop taking new calls, let the running ones finish within a grace period, and
-// exit cleanly.
+// server reflection, cap message sizes, log structured JSON lines, optionally record
+// per-RPC Prometheus metrics and serve them over HTTP on a port of their own, and on
+// SIGTERM or SIGINT stop taking new calls, let the running ones finish within a grace
+// period, and exit cleanly.
 
 #include <grpcpp/grpcpp.h>
 
@@ -15,6 +16,9 @@
 #include <string_view>
 #include <vector>
 
+#include "services/common/metrics_http_server.h"
+#include "services/common/metrics_registry.h"
+
 namespace pnp::services {
 
 struct ServerConfig {
@@ -22,18 +26,24 @@ struct ServerConfig {
   int max_message_bytes = 4 << 20;
   std::vector<grpc::Service*> services;
   std::vector<std::string> service_names;  // full names, for the health service
+  // Per-RPC metrics (rpc_metrics.h) when set; must outlive the runtime. The explicit
+  // initialisers keep GCC 12 quiet about shorter aggregate initialisations.
+  MetricsRegistry* metrics = nullptr;
+  std::string metrics_address{};  // host:port for GET /metrics; empty: no endpoint
 };
 
 class ServerRuntime {
  public:
   explicit ServerRuntime(const ServerConfig& config);
   int port() const { return port_; }
+  int metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }  // 0: off
   grpc::Server& server() { return *server_; }
   void set_serving(bool serving);
   // Stops accepting calls and waits up to `grace` for running ones (then cancels them).
   void shutdown(std::chrono::milliseconds grace);
 
  private:
+  std::unique_ptr<MetricsHttpServer> metrics_http_;
   std::unique_ptr<grpc::Server> server_;
   std::vector<std::string> names_;
   int port_ = 0;
@@ -44,7 +54,8 @@ class ServerRuntime {
 void block_termination_signals();
 int wait_for_termination_signal();  // the signal number
 
-// Announces the port (stdout, for scripts that started the server on port 0, and the log),
+// Announces the port (stdout's first line, for scripts that started the server on port 0,
+// and the log's "listening" event, with "metrics_port" when metrics are served),
 // runs `periodic` every `period` on a background thread until SIGTERM or SIGINT, then
 // drains the server (5 s grace) and returns 0.
 int serve_until_terminated(ServerRuntime& runtime, std::string_view service,

@@ -1,5 +1,7 @@
 #include "services/common/status.h"
 
+#include <array>
+
 namespace pnp::services {
 
 grpc::StatusCode status_code(ErrorCode code) {
@@ -22,6 +24,30 @@ grpc::StatusCode status_code(ErrorCode code) {
       return grpc::StatusCode::INTERNAL;
   }
   return grpc::StatusCode::UNKNOWN;
+}
+
+std::string_view status_code_name(grpc::StatusCode code) {
+  static constexpr std::array<std::string_view, grpc::StatusCode::UNAUTHENTICATED + 1> kNames = {
+      "OK",
+      "CANCELLED",
+      "UNKNOWN",
+      "INVALID_ARGUMENT",
+      "DEADLINE_EXCEEDED",
+      "NOT_FOUND",
+      "ALREADY_EXISTS",
+      "PERMISSION_DENIED",
+      "RESOURCE_EXHAUSTED",
+      "FAILED_PRECONDITION",
+      "ABORTED",
+      "OUT_OF_RANGE",
+      "UNIMPLEMENTED",
+      "INTERNAL",
+      "UNAVAILABLE",
+      "DATA_LOSS",
+      "UNAUTHENTICATED"};
+  const int index =
+      code >= 0 && code < static_cast<int>(kNames.size()) ? code : grpc::StatusCode::UNKNOWN;
+  return kNames[static_cast<std::size_t>(index)];
 }
 
 }  // namespace pnp::services

@@ -6,12 +6,15 @@
 #include <grpcpp/grpcpp.h>
 
 #include <exception>
+#include <string_view>
 
 #include "common/error.h"
 
 namespace pnp::services {
 
 grpc::StatusCode status_code(ErrorCode code);
+// The canonical name ("INVALID_ARGUMENT"); codes outside the canonical set read UNKNOWN.
+std::string_view status_code_name(grpc::StatusCode code);
 
 template <typename Body>
 grpc::Status guarded(Body&& body) {

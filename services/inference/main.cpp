@@ -1,11 +1,13 @@
 // pnp-inference-server: serves the promoted hierarchy from the store (PolicyService).
-//   --address 127.0.0.1:50054  --db ./pnp.db (or $PNP_DB)  --reload-ms 500
+//   --address 127.0.0.1:50060  --db ./pnp.db (or $PNP_DB)  --reload-ms 500
+//   [--metrics-address 127.0.0.1:9101]
 
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdlib>
 
 #include "common/error.h"
+#include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
 
@@ -13,19 +15,29 @@ int main(int argc, char** argv) {
   using namespace pnp::services;
   block_termination_signals();
   CLI::App app{"Serve the promoted pick-and-place hierarchy", "pnp-inference-server"};
-  std::string address = "127.0.0.1:50054";
+  std::string address = "127.0.0.1:50060";
   std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
   int reload_ms = 500;
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();
+  std::string metrics_address;
+  app.add_option("--metrics-address", metrics_address,
+                 "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
   app.add_option("--reload-ms", reload_ms, "how often to look for newly promoted checkpoints")
       ->check(CLI::Range(10, 60'000))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
+    MetricsRegistry metrics;
     PolicyServiceImpl service(db);
-    ServerRuntime runtime({address, 4 << 20, {&service}, {"pnp.policy.v1.PolicyService"}});
+    ServerRuntime runtime({.address = address,
+                           .max_message_bytes = 4 << 20,
+                           .services = {&service},
+                           .service_names = {"pnp.policy.v1.PolicyService"},
+                           // Interceptors cost every call: only when someone can scrape.
+                           .metrics = metrics_address.empty() ? nullptr : &metrics,
+                           .metrics_address = metrics_address});
     return serve_until_terminated(
         runtime, "inference",
         [&] {

@@ -136,6 +136,15 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
   }
 }
 
+SimServiceImpl::SimServiceImpl(MetricsRegistry* metrics)
+    : env_steps_(metrics ? &metrics->counter("pnp_env_steps_total",
+                                             "Environment steps executed (Step and StreamRollout).")
+                         : nullptr) {}
+
+void SimServiceImpl::count_steps(const sv1::StepResponse& response) {
+  if (env_steps_) env_steps_->inc(response.results_size());
+}
+
 grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEnvRequest* request,
                                        sv1::CreateEnvResponse* response) {
   return guarded([&] {
@@ -169,6 +178,7 @@ grpc::Status SimServiceImpl::Step(grpc::ServerContext*, const sv1::StepRequest* 
     const auto batch = registry_.get(request->env_id());
     std::lock_guard lock(batch->mutex);
     step_batch(*batch, *request, *response);
+    count_steps(*response);
     return grpc::Status::OK;
   });
 }
@@ -251,6 +261,7 @@ grpc::Status SimServiceImpl::StreamRollout(
           reset_batch(*batch, request.reset(), *response.mutable_reset());
         } else if (request.has_step()) {
           step_batch(*batch, request.step(), *response.mutable_step());
+          count_steps(response.step());
         } else {
           throw_invalid_argument("request", "a reset or a step", "another env_id");
         }

@@ -4,12 +4,15 @@
 // it does not step environments 0-2 and then fail.
 
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "services/common/metrics_registry.h"
 #include "services/sim/env_registry.h"
 
 namespace pnp::services {
 
 class SimServiceImpl final : public sim::v1::SimulationService::Service {
  public:
+  // With `metrics` (which must outlive the service), counts pnp_env_steps_total.
+  explicit SimServiceImpl(MetricsRegistry* metrics = nullptr);
   EnvRegistry& registry() { return registry_; }
 
   grpc::Status CreateEnv(grpc::ServerContext* context, const sim::v1::CreateEnvRequest* request,
@@ -31,7 +34,10 @@ class SimServiceImpl final : public sim::v1::SimulationService::Service {
           stream) override;
 
  private:
+  void count_steps(const sim::v1::StepResponse& response);
+
   EnvRegistry registry_;
+  Counter* env_steps_ = nullptr;
 };
 
 // The core of Reset and Step, shared by the unary calls and the rollout stream.

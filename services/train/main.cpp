@@ -1,6 +1,7 @@
 // pnp-train-server: trains one role (TrainingService) in the background, writing runs,
 // learning curves and checkpoints to the store; resumes interrupted runs at start.
 //   --role approach  --address 127.0.0.1:50052  --db ./pnp.db (or $PNP_DB)  --threads 0
+//   [--metrics-address 127.0.0.1:9102]
 
 #include <CLI/CLI.hpp>
 #include <cstdlib>
@@ -9,8 +10,38 @@
 
 #include "build_info.h"
 #include "common/error.h"
+#include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
 #include "services/train/training_service.h"
+
+namespace {
+
+// Training progress for Prometheus, refreshed once a second from the run manager.
+class TrainingGauges {
+ public:
+  TrainingGauges(pnp::services::MetricsRegistry& metrics, const std::string& role)
+      : queued_(
+            metrics.gauge("pnp_training_queued_runs", "Runs waiting to train", {{"role", role}})),
+        active_(metrics.gauge("pnp_training_active_run_id", "Id of the run training now (0: idle)",
+                              {{"role", role}})),
+        steps_(metrics.gauge("pnp_training_env_steps",
+                             "Training environment steps of the active run", {{"role", role}})),
+        rate_(metrics.gauge("pnp_training_env_steps_per_second",
+                            "Training environment steps per second of the active run",
+                            {{"role", role}})) {}
+
+  void update(const pnp::training::RunManager::Load& load) {
+    queued_.set(static_cast<double>(load.queued));
+    active_.set(static_cast<double>(load.active.value_or(0)));
+    steps_.set(static_cast<double>(load.active_env_steps));
+    rate_.set(load.active_steps_per_s);
+  }
+
+ private:
+  pnp::services::Gauge &queued_, &active_, &steps_, &rate_;
+};
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
@@ -30,6 +61,9 @@ int main(int argc, char** argv) {
                  "host:port to listen on (port 0: any free port) [127.0.0.1:5005x by role]");
   app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
   app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
+  std::string metrics_address;
+  app.add_option("--metrics-address", metrics_address,
+                 "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   CLI11_PARSE(app, argc, argv);
   const auto port = default_ports.find(role);
   if (port == default_ports.end()) {
@@ -41,11 +75,18 @@ int main(int argc, char** argv) {
   if (address.empty()) address = "127.0.0.1:" + std::to_string(port->second);
   const std::string name = "train-" + role;
   try {
+    MetricsRegistry metrics;
     pnp::training::RunManager manager({db, role, std::string(pnp::kCodeCommit), threads});
     TrainingServiceImpl service(manager);
-    ServerRuntime runtime({address, 4 << 20, {&service}, {"pnp.train.v1.TrainingService"}});
-    return serve_until_terminated(runtime, name, [] {}, std::chrono::milliseconds(1000),
-                                  {{"db", db}, {"role", role}});
+    ServerRuntime runtime({.address = address,
+                           .max_message_bytes = 4 << 20,
+                           .services = {&service},
+                           .service_names = {"pnp.train.v1.TrainingService"},
+                           .metrics = metrics_address.empty() ? nullptr : &metrics,
+                           .metrics_address = metrics_address});
+    TrainingGauges gauges(metrics, role);
+    return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
+                                  std::chrono::milliseconds(1000), {{"db", db}, {"role", role}});
   } catch (const pnp::Error& e) {
     log_event(name, "fatal", {{"error", e.what()}});
     return 1;

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <map>
 
+#include "plot/line_chart_svg.h"
+
 namespace pnp::tools {
 namespace {
 
@@ -177,65 +179,26 @@ std::string curves_csv(const std::vector<MethodRun>& runs) {
 // Success against cumulative training steps: each method's parts are laid end to end
 // (approach, manipulate, retract, then the choreographer), as in the paper's Fig. 5.
 std::string curves_svg(const std::vector<MethodRun>& runs) {
-  constexpr double W = 900, H = 420, L = 70, R = 20, T = 30, B = 50;
-  double max_steps = 1;
-  for (const auto& r : runs) {
-    long long offset = 0;
-    for (const auto& part : r.roles) {
-      if (!part.result.curve.empty())
-        max_steps =
-            std::max(max_steps, static_cast<double>(offset + part.result.curve.back().env_steps));
-      offset += part.result.curve.empty() ? 0 : part.result.curve.back().env_steps;
-    }
-  }
   const std::map<std::string, std::string> colour{
       {"ddpg_her", "#1f77b4"}, {"bc", "#ff7f0e"}, {"e2e", "#2ca02c"}};
-  auto x = [&](double steps) { return L + (W - L - R) * steps / max_steps; };
-  auto y = [&](double success) { return T + (H - T - B) * (1 - success); };
-  std::string svg = fmt::format(
-      "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' "
-      "font-size='12'>\n"
-      "<rect width='100%' height='100%' fill='white'/>\n"
-      "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='black'/><line x1='{}' y1='{}' x2='{}' y2='{}' "
-      "stroke='black'/>\n"
-      "<text x='{}' y='{}' text-anchor='middle'>training environment steps (parts laid end to "
-      "end)</text>\n"
-      "<text x='15' y='{}' transform='rotate(-90 15 {})' text-anchor='middle'>task "
-      "success</text>\n",
-      W, H, L, H - B, W - R, H - B, L, T, L, H - B, (L + W - R) / 2, H - 12, (T + H - B) / 2,
-      (T + H - B) / 2);
-  for (double s : {0.0, 0.5, 0.95, 1.0}) {
-    svg += fmt::format(
-        "<line x1='{}' y1='{:.1f}' x2='{}' y2='{:.1f}' stroke='#ddd'/><text x='{}' y='{:.1f}' "
-        "text-anchor='end'>{}</text>\n",
-        L, y(s), W - R, y(s), L - 5, y(s) + 4, s);
-  }
-  for (int k = 0; k <= 4; ++k) {
-    const double steps = max_steps * k / 4;
-    svg += fmt::format("<text x='{:.1f}' y='{}' text-anchor='middle'>{:.0f}k</text>\n", x(steps),
-                       H - B + 16, steps / 1000);
-  }
-  for (const auto& r : runs) {
-    std::string points;
-    long long offset = 0;
-    for (const auto& part : r.roles) {
-      for (const auto& p : part.result.curve)
-        points += fmt::format("{:.1f},{:.1f} ", x(static_cast<double>(offset + p.env_steps)),
-                              y(p.task_success));
-      offset += part.result.curve.empty() ? 0 : part.result.curve.back().env_steps;
+  std::vector<plot::Series> series;
+  for (const std::string method : {"ddpg_her", "bc", "e2e"}) {
+    for (const auto& r : runs) {
+      if (r.method != method) continue;
+      plot::Series s{method_label(method), colour.at(method), {}};
+      long long offset = 0;
+      for (const auto& part : r.roles) {
+        for (const auto& p : part.result.curve)
+          s.points.emplace_back(static_cast<double>(offset + p.env_steps), p.task_success);
+        offset += part.result.curve.empty() ? 0 : part.result.curve.back().env_steps;
+      }
+      series.push_back(std::move(s));
     }
-    svg += fmt::format("<polyline fill='none' stroke='{}' stroke-opacity='0.8' points='{}'/>\n",
-                       colour.at(r.method), points);
   }
-  double ly = T + 10;
-  for (const std::string m : {"ddpg_her", "bc", "e2e"}) {
-    svg += fmt::format(
-        "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/><text x='{}' "
-        "y='{}'>{}</text>\n",
-        W - 260, ly, W - 235, ly, colour.at(m), W - 228, ly + 4, method_label(m));
-    ly += 18;
-  }
-  return svg + "</svg>\n";
+  plot::ChartSpec spec;
+  spec.x_label = "training environment steps (parts laid end to end)";
+  spec.y_label = "task success";
+  return plot::line_chart_svg(spec, series);
 }
 
 }  // namespace pnp::tools

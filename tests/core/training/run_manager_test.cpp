@@ -123,8 +123,14 @@ TEST(RunManager, CancelsARunningRunAndRefusesToCancelItTwice) {
 TEST(RunManager, CancelsAPendingRunBehindARunningOne) {
   ScratchDir dir("run_manager_cancel_pending");
   RunManager manager({dir.file("pnp.db"), "approach", "test", 1});
+  EXPECT_FALSE(manager.load().active.has_value());
   const auto first = manager.create(small_spec("approach", 1'000'000), {});
   const auto second = manager.create(small_spec(), {});
+  wait_until(manager, [&] { return manager.load().active_env_steps > 0; });
+  const auto load = manager.load();
+  EXPECT_EQ(load.active, first.id);
+  EXPECT_EQ(load.queued, 1u);
+  EXPECT_GT(load.active_steps_per_s, 0.0);
   EXPECT_EQ(manager.cancel(second.id).state, store::RunState::kCancelled);
   manager.cancel(first.id);
   wait_until(manager, [&] { return store::is_terminal(manager.get(first.id).state); });

@@ -1,0 +1,69 @@
+#pragma once
+// pnpctl's commands: each a function over the service endpoints and its own arguments.
+// They print tables on stdout and progress on stderr, and throw pnp::Error (one clear
+// line, non-zero exit) when a call fails.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "clients/pnpctl/endpoints.h"
+#include "pnp/train/v1/train_service.pb.h"
+
+namespace pnp::pnpctl {
+
+// A training request as typed on the command line; zero or empty means "the service's
+// default" for every hyperparameter.
+struct TrainArgs {
+  std::string role = "approach";
+  std::string algorithm;  // empty: ddpg_her for experts and e2e, a3c for hlc
+  std::string robot = "fetch", object = "block";
+  std::uint64_t seed = 0;
+  long long max_steps = 0;
+  double target_success = 0;
+  long long eval_interval = 0;
+  int eval_episodes = 0;
+  double updates_per_transition = 0;
+  std::vector<int> hidden;
+  int workers = 0;
+  std::int64_t parent = 0;
+  std::vector<std::int64_t> prefix, experts;
+  bool detach = false;  // return once created
+  bool quiet = false;   // no progress bar
+};
+train::v1::CreateTrainingRunRequest make_request(const TrainArgs& args);
+
+int train_command(const Endpoints& endpoints, const TrainArgs& args);
+// role empty: every role's service that answers.
+int runs_command(const Endpoints& endpoints, const std::string& role, const std::string& state,
+                 int limit, bool csv);
+int metrics_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
+                    bool csv);
+int plot_command(const Endpoints& endpoints, const std::string& role,
+                 const std::vector<std::int64_t>& run_ids, const std::string& out);
+int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);
+
+struct PredictArgs {
+  std::vector<double> observation, goal;  // given directly, or
+  std::uint64_t seed = 0;                 // the first observation of the sim's episode
+  std::string robot = "fetch", object = "block";
+};
+int predict_command(const Endpoints& endpoints, const PredictArgs& args);
+// Checks the named services (sim, approach, manipulate, retract, hlc, e2e, inference);
+// 0 when every one is SERVING.
+int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
+                   double timeout_s);
+int evaluate_command(const Endpoints& endpoints, const std::string& robot,
+                     const std::string& object, int episodes, std::uint64_t seed, bool json);
+
+struct PipelineArgs {
+  TrainArgs experts;  // role ignored; applied to approach, manipulate and retract
+  TrainArgs choreographer;
+  int eval_episodes = 100;           // held-out episodes through the services
+  std::uint64_t eval_seed = 424242;  // the held-out episodes' seed (no training run uses it)
+  double wait_s = 30;                // for the services to become healthy
+  std::string json_out;              // also write the results as JSON here
+};
+int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args);
+
+}  // namespace pnp::pnpctl

@@ -1,0 +1,30 @@
+#pragma once
+// Where each service listens. The defaults are the platform's conventional loopback
+// ports (scripts/run and deploy/ use the same).
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+namespace pnp::pnpctl {
+
+struct Endpoints {
+  std::string sim = "127.0.0.1:50051";
+  std::string approach = "127.0.0.1:50052";
+  std::string manipulate = "127.0.0.1:50053";
+  std::string retract = "127.0.0.1:50054";
+  std::string hlc = "127.0.0.1:50055";
+  std::string e2e = "127.0.0.1:50056";
+  std::string inference = "127.0.0.1:50060";
+
+  // The training service of a role; INVALID_ARGUMENT for an unknown role.
+  const std::string& training(const std::string& role) const;
+  // Any service by name: sim, inference, or a role. INVALID_ARGUMENT otherwise.
+  const std::string& address_of(const std::string& service) const;
+};
+
+inline constexpr const char* kAllServices[] = {"sim", "approach", "manipulate", "retract",
+                                               "hlc", "e2e",      "inference"};
+
+void add_endpoint_options(CLI::App& app, Endpoints& endpoints);
+
+}  // namespace pnp::pnpctl

@@ -1,0 +1,103 @@
+// runs, metrics and plot: reading what the training services have stored.
+#include <fstream>
+
+#include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/table.h"
+#include "common/error.h"
+#include "plot/line_chart_svg.h"
+#include "pnp/train/v1/train_service.grpc.pb.h"
+
+namespace pnp::pnpctl {
+namespace {
+
+constexpr const char* kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
+
+std::vector<train::v1::MetricPoint> fetch_metrics(const std::string& address, std::int64_t id) {
+  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  train::v1::GetRunMetricsRequest request;
+  request.set_run_id(id);
+  train::v1::GetRunMetricsResponse response;
+  check(stub->GetRunMetrics(context_with_deadline().get(), request, &response), "GetRunMetrics",
+        address);
+  return {response.points().begin(), response.points().end()};
+}
+
+}  // namespace
+
+int runs_command(const Endpoints& endpoints, const std::string& role, const std::string& state,
+                 int limit, bool csv) {
+  Table table({"run", "role", "algorithm", "seed", "state", "steps", "success", "reached",
+               "to_target", "checkpoint", "error"});
+  std::vector<std::string> roles;
+  if (role.empty()) {
+    roles.assign(std::begin(kRoles), std::end(kRoles));
+  } else {
+    endpoints.training(role);  // refuses an unknown role
+    roles = {role};
+  }
+  for (const auto& r : roles) {
+    const std::string& address = endpoints.training(r);
+    auto stub = train::v1::TrainingService::NewStub(channel(address));
+    train::v1::ListTrainingRunsRequest request;
+    request.set_page_size(limit);
+    if (!state.empty()) request.set_state(parse_state(state, "--state"));
+    train::v1::ListTrainingRunsResponse response;
+    const grpc::Status status = stub->ListTrainingRuns(
+        context_with_deadline(std::chrono::seconds(3)).get(), request, &response);
+    if (role.empty() && status.error_code() == grpc::StatusCode::UNAVAILABLE) {
+      std::fprintf(stderr, "pnpctl: %s training service (%s) unavailable: skipped\n", r.c_str(),
+                   address.c_str());
+      continue;
+    }
+    check(status, "ListTrainingRuns", address);
+    for (const auto& run : response.runs()) {
+      table.add({std::to_string(run.run_id()), short_name(run.role()), short_name(run.algorithm()),
+                 std::to_string(run.seed()), short_name(run.state()),
+                 std::to_string(run.env_steps()), fixed(run.last_success(), 2),
+                 run.reached() ? "yes" : "no",
+                 run.reached() ? std::to_string(run.steps_to_target()) : "-",
+                 std::to_string(run.latest_checkpoint_id()), run.error()});
+    }
+  }
+  csv ? table.print_csv(stdout) : table.print(stdout);
+  return 0;
+}
+
+int metrics_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
+                    bool csv) {
+  Table table({"env_steps", "episodes", "wall_s", "task_success", "subtask_success",
+               "sampled_success", "critic_loss", "actor_loss", "updates"});
+  for (const auto& p : fetch_metrics(endpoints.training(role), run_id)) {
+    table.add({std::to_string(p.env_steps()), std::to_string(p.episodes()), fixed(p.wall_s(), 1),
+               fixed(p.task_success(), 3), fixed(p.subtask_success(), 3),
+               fixed(p.sampled_success(), 3), fixed(p.critic_loss(), 5), fixed(p.actor_loss(), 5),
+               std::to_string(p.updates())});
+  }
+  csv ? table.print_csv(stdout) : table.print(stdout);
+  return 0;
+}
+
+int plot_command(const Endpoints& endpoints, const std::string& role,
+                 const std::vector<std::int64_t>& run_ids, const std::string& out) {
+  if (run_ids.empty()) throw_invalid_argument("RUN", "at least one run id", "none");
+  std::vector<plot::Series> series;
+  for (std::size_t i = 0; i < run_ids.size(); ++i) {
+    plot::Series s{"run " + std::to_string(run_ids[i]), plot::palette_colour(i), {}};
+    for (const auto& p : fetch_metrics(endpoints.training(role), run_ids[i]))
+      s.points.emplace_back(static_cast<double>(p.env_steps()), p.task_success());
+    series.push_back(std::move(s));
+  }
+  plot::ChartSpec spec;
+  spec.title = "Learning curves";
+  spec.x_label = "training environment steps";
+  spec.y_label = "task success (fresh evaluation episodes)";
+  std::ofstream file(out);
+  if (!file) throw_invalid_argument("--out", "a writable file path", "\"" + out + "\"");
+  file << plot::line_chart_svg(spec, series);
+  if (!file.flush()) throw Error(ErrorCode::kUnavailable, "could not write " + out);
+  std::printf("wrote %s (%zu runs)\n", out.c_str(), run_ids.size());
+  return 0;
+}
+
+}  // namespace pnp::pnpctl

@@ -1,0 +1,170 @@
+// pnpctl: the platform's command line. Every command talks to the services over gRPC
+// (addresses: --sim, --approach, ..., --inference; defaults are the loopback ports
+// scripts/run uses). Errors are one line on stderr and a non-zero exit.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <functional>
+
+#include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/endpoints.h"
+#include "common/error.h"
+
+namespace {
+
+using namespace pnp::pnpctl;
+
+void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
+  if (with_role)
+    cmd.add_option("--role", a.role, "approach, manipulate, retract, hlc or e2e")
+        ->capture_default_str();
+  cmd.add_option("--algo", a.algorithm, "ddpg_her, bc, bc_offline or a3c [by role]");
+  cmd.add_option("--robot", a.robot)->capture_default_str();
+  cmd.add_option("--object", a.object)->capture_default_str();
+  cmd.add_option("--seed", a.seed)->capture_default_str();
+  cmd.add_option("--max-steps", a.max_steps, "training env steps cap [service: 200000]");
+  cmd.add_option("--target-success", a.target_success, "success to reach twice [0.95]");
+  cmd.add_option("--eval-interval", a.eval_interval, "training steps between evaluations [1000]");
+  cmd.add_option("--eval-episodes", a.eval_episodes, "episodes per evaluation [100]");
+  cmd.add_option("--updates-per-transition", a.updates_per_transition,
+                 "DDPG gradient steps per stored transition");
+  cmd.add_option("--hidden", a.hidden, "hidden widths, e.g. 256,256,256")->delimiter(',');
+  cmd.add_option("--workers", a.workers, "A3C workers (hlc)");
+  cmd.add_flag("--quiet", a.quiet, "no progress bar");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Control the pick-and-place training and inference platform", "pnpctl"};
+  app.require_subcommand(1);
+  Endpoints endpoints;
+  add_endpoint_options(app, endpoints);
+  std::function<int()> command;
+
+  TrainArgs train;
+  auto* train_cmd = app.add_subcommand("train", "start a training run and follow it");
+  add_train_options(*train_cmd, train, true);
+  train_cmd->add_option("--parent", train.parent, "fine-tune from this checkpoint id");
+  train_cmd->add_option("--prefix", train.prefix, "checkpoint ids of the experts before this one")
+      ->delimiter(',');
+  train_cmd->add_option("--experts", train.experts, "hlc: approach,manipulate,retract checkpoints")
+      ->delimiter(',');
+  train_cmd->add_flag("--detach", train.detach, "return once the run is created");
+  train_cmd->callback([&] { command = [&] { return train_command(endpoints, train); }; });
+
+  std::string role, state;
+  int limit = 20;
+  bool csv = false;
+  auto* runs_cmd = app.add_subcommand("runs", "list training runs, newest first");
+  runs_cmd->add_option("--role", role, "one role's runs [all]");
+  runs_cmd->add_option("--state", state, "pending, running, succeeded, failed or cancelled");
+  runs_cmd->add_option("--limit", limit, "runs per role")->capture_default_str();
+  runs_cmd->add_flag("--csv", csv, "comma-separated output");
+  runs_cmd->callback(
+      [&] { command = [&] { return runs_command(endpoints, role, state, limit, csv); }; });
+
+  std::int64_t run_id = 0;
+  std::string metrics_role = "approach";
+  auto* metrics_cmd = app.add_subcommand("metrics", "a run's learning curve");
+  metrics_cmd->add_option("RUN", run_id, "run id")->required();
+  metrics_cmd->add_option("--via", metrics_role, "training service to ask (all share the store)")
+      ->capture_default_str();
+  metrics_cmd->add_flag("--csv", csv, "comma-separated output");
+  metrics_cmd->callback(
+      [&] { command = [&] { return metrics_command(endpoints, metrics_role, run_id, csv); }; });
+
+  std::vector<std::int64_t> plot_runs;
+  std::string plot_out = "learning_curves.svg";
+  auto* plot_cmd = app.add_subcommand("plot", "draw learning curves as SVG");
+  plot_cmd->add_option("RUN", plot_runs, "run ids")->required();
+  plot_cmd->add_option("--out", plot_out, "SVG file")->capture_default_str();
+  plot_cmd->add_option("--via", metrics_role, "training service to ask")->capture_default_str();
+  plot_cmd->callback([&] {
+    command = [&] { return plot_command(endpoints, metrics_role, plot_runs, plot_out); };
+  });
+
+  std::int64_t checkpoint_id = 0;
+  auto* promote_cmd = app.add_subcommand("promote", "serve a checkpoint for its role");
+  promote_cmd->add_option("CHECKPOINT", checkpoint_id, "checkpoint id")->required();
+  promote_cmd->callback(
+      [&] { command = [&] { return promote_command(endpoints, checkpoint_id); }; });
+
+  PredictArgs predict;
+  auto* predict_cmd = app.add_subcommand(
+      "predict", "ask the inference service what to do (given state, or a sim episode's first)");
+  predict_cmd->add_option("--observation", predict.observation, "25 comma-separated values")
+      ->delimiter(',');
+  predict_cmd->add_option("--goal", predict.goal, "x,y,z in m")->delimiter(',');
+  predict_cmd->add_option("--seed", predict.seed, "sim episode seed (without --observation)")
+      ->capture_default_str();
+  predict_cmd->add_option("--robot", predict.robot)->capture_default_str();
+  predict_cmd->add_option("--object", predict.object)->capture_default_str();
+  predict_cmd->callback([&] { command = [&] { return predict_command(endpoints, predict); }; });
+
+  std::vector<std::string> services(std::begin(kAllServices), std::end(kAllServices));
+  double timeout_s = 2;
+  auto* health_cmd = app.add_subcommand("health", "check every service's health");
+  health_cmd->add_option("--only", services, "services to check")->delimiter(',');
+  health_cmd->add_option("--timeout", timeout_s, "seconds per check")->capture_default_str();
+  health_cmd->callback(
+      [&] { command = [&] { return health_command(endpoints, services, timeout_s); }; });
+
+  int episodes = 100;
+  std::uint64_t eval_seed = 424242;
+  bool json = false;
+  std::string robot = "fetch", object = "block";
+  auto* evaluate_cmd = app.add_subcommand(
+      "evaluate", "held-out episodes of the served hierarchy through sim and inference");
+  evaluate_cmd->add_option("--episodes", episodes)->capture_default_str();
+  evaluate_cmd->add_option("--seed", eval_seed)->capture_default_str();
+  evaluate_cmd->add_option("--robot", robot)->capture_default_str();
+  evaluate_cmd->add_option("--object", object)->capture_default_str();
+  evaluate_cmd->add_flag("--json", json);
+  evaluate_cmd->callback([&] {
+    command = [&] { return evaluate_command(endpoints, robot, object, episodes, eval_seed, json); };
+  });
+
+  PipelineArgs pipeline;
+  pipeline.experts.updates_per_transition = 0.5;
+  auto* pipeline_cmd = app.add_subcommand(
+      "pipeline",
+      "train the three experts (chained), then the choreographer over them, promote, evaluate");
+  add_train_options(*pipeline_cmd, pipeline.experts, false);
+  pipeline_cmd->add_option("--hlc-max-steps", pipeline.choreographer.max_steps,
+                           "choreographer step cap");
+  pipeline_cmd->add_option("--hlc-workers", pipeline.choreographer.workers, "A3C workers");
+  pipeline_cmd->add_option("--held-out-episodes", pipeline.eval_episodes)->capture_default_str();
+  pipeline_cmd->add_option("--held-out-seed", pipeline.eval_seed)->capture_default_str();
+  pipeline_cmd->add_option("--wait", pipeline.wait_s, "seconds to wait for the services")
+      ->capture_default_str();
+  pipeline_cmd->add_option("--json-out", pipeline.json_out, "also write the results as JSON");
+  pipeline_cmd->callback([&] {
+    // The choreographer shares the world, seed, stop rule and output settings.
+    TrainArgs& c = pipeline.choreographer;
+    const TrainArgs& e = pipeline.experts;
+    c.robot = e.robot;
+    c.object = e.object;
+    c.seed = e.seed;
+    c.target_success = e.target_success;
+    c.eval_interval = e.eval_interval;
+    c.eval_episodes = e.eval_episodes;
+    c.quiet = e.quiet;
+    command = [&] { return pipeline_command(endpoints, pipeline); };
+  });
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return command();
+  } catch (const pnp::Error& e) {
+    std::fprintf(stderr, "pnpctl: error: %s\n", e.what());
+    return e.code() == pnp::ErrorCode::kInvalidArgument ? 2 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pnpctl: error: %s\n", e.what());
+    return 1;
+  }
+}

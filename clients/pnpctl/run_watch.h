@@ -1,0 +1,25 @@
+#pragma once
+// Follows a training run through WatchTrainingRun until it ends, drawing a live progress
+// bar on a terminal (one line per evaluation otherwise, e.g. in CI logs).
+
+#include <cstdio>
+#include <string>
+
+#include "pnp/train/v1/train_service.pb.h"
+
+namespace pnp::pnpctl {
+
+struct WatchOptions {
+  bool quiet = false;  // nothing on the progress stream
+  std::FILE* progress = stderr;
+};
+
+// The run as it ended. Throws pnp::Error if the stream fails.
+train::v1::TrainingRun watch_run(const std::string& address, std::int64_t run_id,
+                                 const WatchOptions& options);
+
+// "approach  run 3  [#######-------]  12.0k/60.0k steps  success 0.84  eta 0m41s"
+std::string progress_line(const train::v1::TrainingRun& run, const train::v1::MetricPoint* metric,
+                          int width);
+
+}  // namespace pnp::pnpctl

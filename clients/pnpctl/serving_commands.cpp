@@ -1,0 +1,139 @@
+// promote, predict, health and evaluate: the inference side and the platform's health.
+#include <nlohmann/json.hpp>
+
+#include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/service_evaluation.h"
+#include "clients/pnpctl/table.h"
+#include "common/error.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "pnp/sim/v1/sim_service.grpc.pb.h"
+
+namespace pnp::pnpctl {
+
+int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id) {
+  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  policy::v1::PromoteCheckpointRequest request;
+  request.set_checkpoint_id(checkpoint_id);
+  policy::v1::PromoteCheckpointResponse response;
+  check(stub->PromoteCheckpoint(context_with_deadline().get(), request, &response),
+        "PromoteCheckpoint", endpoints.inference);
+  std::printf("checkpoint %lld now serves %s\n", static_cast<long long>(response.checkpoint_id()),
+              short_name(response.role()).c_str());
+  return 0;
+}
+
+namespace {
+
+// The first observation and goal of the simulation service's episode for `seed`.
+void observe_from_sim(const Endpoints& endpoints, const PredictArgs& args,
+                      policy::v1::PredictRequest& request) {
+  auto sim = sim::v1::SimulationService::NewStub(channel(endpoints.sim));
+  sim::v1::CreateEnvRequest create;
+  create.set_robot(parse_robot(args.robot, "--robot"));
+  create.set_object(parse_object(args.object, "--object"));
+  create.set_seed(args.seed);
+  create.set_count(1);
+  sim::v1::CreateEnvResponse created;
+  check(sim->CreateEnv(context_with_deadline().get(), create, &created), "CreateEnv",
+        endpoints.sim);
+  sim::v1::ResetRequest reset;
+  reset.set_env_id(created.env_id());
+  sim::v1::ResetResponse state;
+  const grpc::Status status = sim->Reset(context_with_deadline().get(), reset, &state);
+  sim::v1::CloseEnvRequest close;
+  close.set_env_id(created.env_id());
+  sim::v1::CloseEnvResponse closed;
+  sim->CloseEnv(context_with_deadline().get(), close, &closed);
+  check(status, "Reset", endpoints.sim);
+  *request.mutable_observation() = state.states(0).observation();
+  *request.mutable_goal() = state.states(0).episode_goal();
+}
+
+}  // namespace
+
+int predict_command(const Endpoints& endpoints, const PredictArgs& args) {
+  policy::v1::PredictRequest request;
+  if (args.observation.empty() && args.goal.empty()) {
+    observe_from_sim(endpoints, args, request);
+  } else {
+    // Sizes are checked by the service, which names the field; only the goal's three
+    // components are placed here.
+    for (double v : args.observation) request.mutable_observation()->add_values(v);
+    if (args.goal.size() != 3)
+      throw_invalid_argument("--goal", "3 comma-separated values (x,y,z in m)",
+                             std::to_string(args.goal.size()) + " values");
+    request.mutable_goal()->set_x_m(args.goal[0]);
+    request.mutable_goal()->set_y_m(args.goal[1]);
+    request.mutable_goal()->set_z_m(args.goal[2]);
+  }
+  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  policy::v1::PredictResponse response;
+  check(stub->Predict(context_with_deadline().get(), request, &response), "Predict",
+        endpoints.inference);
+  const auto& a = response.action();
+  std::printf("subtask  %s\naction   dx %+.3f  dy %+.3f  dz %+.3f  gripper %+.3f\nvalue    %.4f\n",
+              short_name(response.subtask()).c_str(), a.dx(), a.dy(), a.dz(), a.gripper(),
+              response.value());
+  if (response.subtask_probabilities_size() == 3) {
+    std::printf("choice   approach %.3f  manipulate %.3f  retract %.3f\n",
+                response.subtask_probabilities(0), response.subtask_probabilities(1),
+                response.subtask_probabilities(2));
+  }
+  std::printf("served   choreographer checkpoint %lld, expert checkpoint %lld\n",
+              static_cast<long long>(response.choreographer_checkpoint_id()),
+              static_cast<long long>(response.expert_checkpoint_id()));
+  return 0;
+}
+
+int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
+                   double timeout_s) {
+  Table table({"service", "address", "status"});
+  int failures = 0;
+  for (const auto& name : services) {
+    const std::string& address = endpoints.address_of(name);
+    auto stub = grpc::health::v1::Health::NewStub(channel(address));
+    grpc::health::v1::HealthCheckResponse response;
+    const auto timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000));
+    const grpc::Status status = stub->Check(context_with_deadline(timeout).get(), {}, &response);
+    std::string text;
+    if (!status.ok()) {
+      text = status.error_code() == grpc::StatusCode::UNAVAILABLE ||
+                     status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED
+                 ? "UNREACHABLE"
+                 : "ERROR: " + status.error_message();
+    } else {
+      text = grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
+    }
+    failures += text == "SERVING" ? 0 : 1;
+    table.add({name, address, text});
+  }
+  table.print(stdout);
+  return failures == 0 ? 0 : 1;
+}
+
+int evaluate_command(const Endpoints& endpoints, const std::string& robot,
+                     const std::string& object, int episodes, std::uint64_t seed, bool json) {
+  const ServiceEvaluation e = evaluate_through_services(
+      endpoints, parse_robot(robot, "--robot"), parse_object(object, "--object"), episodes, seed);
+  if (json) {
+    nlohmann::json out = {{"episodes", e.episodes},
+                          {"successes", e.successes},
+                          {"success_rate", e.success_rate()},
+                          {"env_steps", e.env_steps},
+                          {"seed", seed},
+                          {"sequences", e.sequences}};
+    std::printf("%s\n", out.dump().c_str());
+    return 0;
+  }
+  std::printf("%s/%s: success %.3f over %d held-out episodes (seed %llu)", robot.c_str(),
+              object.c_str(), e.success_rate(), e.episodes, static_cast<unsigned long long>(seed));
+  if (!e.sequences.empty())
+    std::printf(", most frequent choices %s x%d", e.sequences.front().first.c_str(),
+                e.sequences.front().second);
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace pnp::pnpctl

@@ -1,0 +1,57 @@
+#include <cstdio>
+
+#include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/run_watch.h"
+#include "pnp/train/v1/train_service.grpc.pb.h"
+
+namespace pnp::pnpctl {
+
+train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
+  train::v1::CreateTrainingRunRequest r;
+  r.set_role(parse_role(a.role, "--role"));
+  r.set_algorithm(parse_algorithm(
+      !a.algorithm.empty() ? a.algorithm : (a.role == "hlc" ? "a3c" : "ddpg_her"), "--algo"));
+  r.set_robot(parse_robot(a.robot, "--robot"));
+  r.set_object(parse_object(a.object, "--object"));
+  r.set_seed(a.seed);
+  if (a.max_steps) r.mutable_stop()->set_max_steps(a.max_steps);
+  if (a.target_success) r.mutable_stop()->set_target_success(a.target_success);
+  if (a.eval_interval) r.mutable_stop()->set_eval_interval_steps(a.eval_interval);
+  if (a.eval_episodes) r.mutable_stop()->set_eval_episodes(a.eval_episodes);
+  if (a.updates_per_transition)
+    r.mutable_ddpg()->set_updates_per_transition(a.updates_per_transition);
+  for (int width : a.hidden) r.mutable_ddpg()->add_hidden(width);
+  if (a.workers) r.mutable_a3c()->set_workers(a.workers);
+  r.set_parent_checkpoint_id(a.parent);
+  for (auto id : a.prefix) r.add_prefix_checkpoint_ids(id);
+  for (auto id : a.experts) r.add_expert_checkpoint_ids(id);
+  return r;
+}
+
+int train_command(const Endpoints& endpoints, const TrainArgs& args) {
+  const std::string& address = endpoints.training(args.role);
+  const auto request = make_request(args);
+  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  train::v1::CreateTrainingRunResponse created;
+  check(stub->CreateTrainingRun(context_with_deadline().get(), request, &created),
+        "CreateTrainingRun", address);
+  std::printf("run %lld created (%s)\n", static_cast<long long>(created.run().run_id()),
+              short_name(created.run().state()).c_str());
+  if (args.detach) return 0;
+  const auto run = watch_run(address, created.run().run_id(), {args.quiet, stderr});
+  std::printf(
+      "run %lld %s: %lld steps, success %.2f, %s, latest checkpoint %lld\n",
+      static_cast<long long>(run.run_id()), short_name(run.state()).c_str(),
+      static_cast<long long>(run.env_steps()), run.last_success(),
+      run.reached()
+          ? ("target reached at " + std::to_string(run.steps_to_target()) + " steps").c_str()
+          : "target not reached",
+      static_cast<long long>(run.latest_checkpoint_id()));
+  if (run.state() == train::v1::RUN_STATE_FAILED)
+    std::fprintf(stderr, "pnpctl: run %lld failed: %s\n", static_cast<long long>(run.run_id()),
+                 run.error().c_str());
+  return run.state() == train::v1::RUN_STATE_SUCCEEDED ? 0 : 1;
+}
+
+}  // namespace pnp::pnpctl

@@ -1,0 +1,100 @@
+#include "plot/line_chart_svg.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <set>
+
+namespace pnp::plot {
+namespace {
+
+// Text from labels goes into XML: escape what would break it.
+std::string escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string palette_colour(std::size_t i) {
+  static constexpr std::array<const char*, 8> kColours{"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
+                                                       "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
+  return kColours[i % kColours.size()];
+}
+
+std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& series) {
+  constexpr double W = 900, H = 420, L = 70, R = 20, B = 50;
+  const double T = spec.title.empty() ? 30 : 45;
+  double x_max = 1;
+  for (const auto& s : series)
+    for (const auto& [x, y] : s.points) x_max = std::max(x_max, x);
+  const double y_span = spec.y_max > spec.y_min ? spec.y_max - spec.y_min : 1;
+  auto px = [&](double x) { return L + (W - L - R) * x / x_max; };
+  auto py = [&](double y) {
+    return T + (H - T - B) * (1 - (std::clamp(y, spec.y_min, spec.y_max) - spec.y_min) / y_span);
+  };
+  std::string svg = fmt::format(
+      "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' "
+      "font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n"
+      "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='black'/>"
+      "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='black'/>\n"
+      "<text x='{}' y='{}' text-anchor='middle'>{}</text>\n"
+      "<text x='15' y='{}' transform='rotate(-90 15 {})' text-anchor='middle'>{}</text>\n",
+      W, H, L, H - B, W - R, H - B, L, T, L, H - B, (L + W - R) / 2, H - 12, escape(spec.x_label),
+      (T + H - B) / 2, (T + H - B) / 2, escape(spec.y_label));
+  if (!spec.title.empty()) {
+    svg += fmt::format("<text x='{}' y='22' text-anchor='middle' font-size='15'>{}</text>\n", W / 2,
+                       escape(spec.title));
+  }
+  for (double g : spec.y_grid) {
+    svg += fmt::format(
+        "<line x1='{}' y1='{:.1f}' x2='{}' y2='{:.1f}' stroke='#ddd'/><text x='{}' y='{:.1f}' "
+        "text-anchor='end'>{}</text>\n",
+        L, py(g), W - R, py(g), L - 5, py(g) + 4, g);
+  }
+  for (int k = 0; k <= 4; ++k) {
+    const double x = x_max * k / 4;
+    const std::string label =
+        spec.x_in_thousands ? fmt::format("{:.0f}k", x / 1000) : fmt::format("{:.0f}", x);
+    svg += fmt::format("<text x='{:.1f}' y='{}' text-anchor='middle'>{}</text>\n", px(x),
+                       H - B + 16, label);
+  }
+  for (const auto& s : series) {
+    std::string points;
+    for (const auto& [x, y] : s.points) points += fmt::format("{:.1f},{:.1f} ", px(x), py(y));
+    svg += fmt::format("<polyline fill='none' stroke='{}' stroke-opacity='0.8' points='{}'/>\n",
+                       s.colour, points);
+  }
+  double ly = T + 10;
+  std::set<std::string> listed;
+  for (const auto& s : series) {
+    if (!listed.insert(s.label).second) continue;
+    svg += fmt::format(
+        "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/><text x='{}' "
+        "y='{}'>{}</text>\n",
+        W - 260, ly, W - 235, ly, s.colour, W - 228, ly + 4, escape(s.label));
+    ly += 18;
+  }
+  return svg + "</svg>\n";
+}
+
+}  // namespace pnp::plot
