@@ -54,23 +54,7 @@ std::unique_ptr<grpc::ClientContext> context_with_deadline(std::chrono::millisec
 }
 
 void check(const grpc::Status& status, std::string_view what, const std::string& address) {
-  if (status.ok()) return;
-  const std::string name(services::status_code_name(status.error_code()));
-  const std::string message =
-      std::string(what) + " (" + address + "): " + name + ": " + status.error_message();
-  switch (status.error_code()) {
-    case grpc::StatusCode::INVALID_ARGUMENT:
-      throw Error(ErrorCode::kInvalidArgument, message);
-    case grpc::StatusCode::NOT_FOUND:
-      throw Error(ErrorCode::kNotFound, message);
-    case grpc::StatusCode::FAILED_PRECONDITION:
-      throw Error(ErrorCode::kFailedPrecondition, message);
-    case grpc::StatusCode::UNAVAILABLE:
-    case grpc::StatusCode::DEADLINE_EXCEEDED:
-      throw Error(ErrorCode::kUnavailable, message);
-    default:
-      throw Error(ErrorCode::kInternal, message);
-  }
+  services::throw_if_error(status, what, address);
 }
 
 common::v1::Role parse_role(const std::string& name, std::string_view field) {

@@ -139,7 +139,7 @@ std::string choice_string(const HlcEpisode& episode) {
 }
 
 ChoreographerEvaluation evaluate_choreographer(
-    const std::shared_ptr<const sim::WorldModel>& world, const ChoreographerNet& net,
+    const sim::EnvFactory& envs, const ChoreographerNet& net,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts, int episodes,
     std::uint64_t seed, ThreadPool& pool) {
   const auto count = static_cast<std::size_t>(episodes);
@@ -148,13 +148,13 @@ ChoreographerEvaluation evaluate_choreographer(
   std::vector<int> steps(count, 0);
   std::vector<std::string> choices(count);
   pool.parallel_for(workers, [&](std::size_t w) {
-    sim::PickPlaceEnv env(world);
+    const auto env = envs.make();
     ChoreographerNet own = net;
     Experts own_experts = clone_experts(experts);
     Rng unused(0);
     for (std::size_t i = w; i < count; i += workers) {
       const HlcEpisode e =
-          run_hlc_episode(env, own, raw(own_experts), derive_seed(seed, i), false, unused);
+          run_hlc_episode(*env, own, raw(own_experts), derive_seed(seed, i), false, unused);
       success[i] = e.success ? 1 : 0;
       steps[i] = e.env_steps;
       choices[i] = choice_string(e);
@@ -180,7 +180,7 @@ ChoreographerEvaluation evaluate_choreographer(
 }
 
 HlcTrainingOutput train_choreographer(
-    const std::shared_ptr<const sim::WorldModel>& world,
+    const sim::EnvFactory& envs,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
     const HlcTrainingConfig& config, const ProgressCallback& progress) {
   config.a3c.validate();
@@ -233,7 +233,7 @@ HlcTrainingOutput train_choreographer(
   std::vector<ChoreographerNet> locals(static_cast<std::size_t>(workers), *shared);
   auto worker = [&](long long w) {
     try {
-      sim::PickPlaceEnv env(world);
+      const auto env = envs.make();
       ChoreographerNet& local = locals[static_cast<std::size_t>(w)];
       Experts own = clone_experts(experts);
       for (long long k = 0;; ++k) {
@@ -241,7 +241,7 @@ HlcTrainingOutput train_choreographer(
         const auto episode_index = static_cast<std::uint64_t>(first_ticket + ticket);
         Rng choice_rng(derive_seed(choice_stream, episode_index));
         HlcEpisode episode = run_hlc_episode(
-            env, local, raw(own), derive_seed(episode_stream, episode_index), true, choice_rng);
+            *env, local, raw(own), derive_seed(episode_stream, episode_index), true, choice_rng);
         local.zero_grads();
         episode_gradients(local, episode, config.a3c);
         gate.wait_for(ticket);
@@ -270,7 +270,7 @@ HlcTrainingOutput train_choreographer(
           double raw_input[sim::kObservationSize + sim::kGoalSize];
           for (int i = 0; i < sim::kObservationSize; ++i) raw_input[i] = o(i);
           for (int i = 0; i < sim::kGoalSize; ++i)
-            raw_input[sim::kObservationSize + i] = env.episode_goal()(i);
+            raw_input[sim::kObservationSize + i] = env->episode_goal()(i);
           shared->normalizer().update(raw_input);
         }
         shared->normalizer().refresh();
@@ -282,7 +282,7 @@ HlcTrainingOutput train_choreographer(
           const auto eval_start = Clock::now();
           CurvePoint point;
           const ChoreographerEvaluation evaluation = evaluate_choreographer(
-              world, *shared, experts, config.stop.eval_episodes, eval_stream, eval_pool);
+              envs, *shared, experts, config.stop.eval_episodes, eval_stream, eval_pool);
           result.eval_env_steps += evaluation.env_steps;
           point.task_success = point.subtask_success = evaluation.success_rate;
           point.sampled_success = static_cast<double>(sampled_successes) /

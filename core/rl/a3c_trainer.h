@@ -20,7 +20,7 @@
 #include "rl/hlc_episode.h"
 #include "rl/training_progress.h"
 #include "sim/subtask_policy.h"
-#include "sim/world_model.h"
+#include "sim/env_factory.h"
 
 namespace pnp::rl {
 
@@ -59,7 +59,7 @@ struct HlcTrainingOutput {
 
 // experts: prototypes, cloned for every worker and evaluation thread.
 HlcTrainingOutput train_choreographer(
-    const std::shared_ptr<const sim::WorldModel>& world,
+    const sim::EnvFactory& envs,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
     const HlcTrainingConfig& config, const ProgressCallback& progress = {});
 
@@ -79,7 +79,7 @@ struct ChoreographerEvaluation {
 // Greedy evaluation of the choreographer over the experts on episodes seeded
 // derive_seed(seed, i).
 ChoreographerEvaluation evaluate_choreographer(
-    const std::shared_ptr<const sim::WorldModel>& world, const ChoreographerNet& net,
+    const sim::EnvFactory& envs, const ChoreographerNet& net,
     const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks>& experts, int episodes,
     std::uint64_t seed, ThreadPool& pool);
 

@@ -4,18 +4,18 @@
 #include <vector>
 
 #include "common/rng.h"
-#include "sim/pick_place_env.h"
 
 namespace pnp::rl {
 
-EndToEndReport evaluate_end_to_end(const std::shared_ptr<const sim::WorldModel>& world,
+EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs,
                                    const sim::SubtaskPolicy& policy, int episodes,
                                    std::uint64_t seed, ThreadPool& pool) {
   const auto count = static_cast<std::size_t>(episodes);
   const std::size_t workers = std::min(pool.size(), count);
   std::vector<char> success(count, 0);
   pool.parallel_for(workers, [&](std::size_t w) {
-    sim::PickPlaceEnv env(world);
+    const auto made = envs.make();
+    sim::Environment& env = *made;
     const auto own = policy.clone();
     for (std::size_t i = w; i < count; i += workers) {
       env.reset(derive_seed(seed, i));

@@ -6,7 +6,7 @@
 
 #include "common/thread_pool.h"
 #include "sim/subtask_policy.h"
-#include "sim/world_model.h"
+#include "sim/env_factory.h"
 
 namespace pnp::rl {
 
@@ -15,7 +15,7 @@ struct EndToEndReport {
   long long env_steps = 0;
 };
 
-EndToEndReport evaluate_end_to_end(const std::shared_ptr<const sim::WorldModel>& world,
+EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs,
                                    const sim::SubtaskPolicy& policy, int episodes,
                                    std::uint64_t seed, ThreadPool& pool);
 

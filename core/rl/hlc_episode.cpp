@@ -47,7 +47,7 @@ std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& sta
   return out;
 }
 
-HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
+HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
                            std::uint64_t episode_seed, bool sample, Rng& choice_rng) {
   HlcEpisode out;

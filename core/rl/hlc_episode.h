@@ -13,7 +13,7 @@
 
 #include "common/rng.h"
 #include "rl/choreographer_net.h"
-#include "sim/pick_place_env.h"
+#include "sim/environment.h"
 #include "sim/subtask_policy.h"
 
 namespace pnp::rl {
@@ -49,7 +49,7 @@ std::array<double, sim::kNumSubtasks> masked_softmax(
     const std::array<bool, sim::kNumSubtasks>& available);
 
 // sample: draw choices from the policy (training); otherwise take the most probable.
-HlcEpisode run_hlc_episode(sim::PickPlaceEnv& env, ChoreographerNet& net,
+HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
                            std::uint64_t episode_seed, bool sample, Rng& choice_rng);
 

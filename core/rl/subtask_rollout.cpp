@@ -16,7 +16,7 @@ sim::Action explore(const sim::Action& action, const ExplorationNoise& noise, Rn
   return out.cwiseMax(-1.0).cwiseMin(1.0);
 }
 
-SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
+SubtaskEpisode run_subtask_episode(sim::Environment& env, sim::Subtask subtask,
                                    const sim::SubtaskPolicies& prefix, sim::SubtaskPolicy& expert,
                                    const ExplorationNoise* noise, std::uint64_t episode_seed,
                                    Rng& noise_rng) {
@@ -63,7 +63,7 @@ SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
 
 namespace pnp::rl {
 
-SubtaskEpisode run_end_to_end_episode(sim::PickPlaceEnv& env, sim::SubtaskPolicy& policy,
+SubtaskEpisode run_end_to_end_episode(sim::Environment& env, sim::SubtaskPolicy& policy,
                                       const ExplorationNoise& noise, std::uint64_t episode_seed,
                                       Rng& noise_rng) {
   SubtaskEpisode out;

@@ -12,7 +12,7 @@
 #include "common/rng.h"
 #include "rl/ddpg_her_agent.h"
 #include "rl/segment_replay.h"
-#include "sim/pick_place_env.h"
+#include "sim/environment.h"
 #include "sim/scripted_pipeline.h"
 #include "sim/subtask_policy.h"
 
@@ -35,14 +35,14 @@ struct SubtaskEpisode {
 // The subtask's actions come from `expert` (any policy); exploration noise is added
 // unless `noise` is null (demonstrations). `prefix` runs the subtasks before it (its
 // entries from `subtask` on are not used); the prefix acts without noise.
-SubtaskEpisode run_subtask_episode(sim::PickPlaceEnv& env, sim::Subtask subtask,
+SubtaskEpisode run_subtask_episode(sim::Environment& env, sim::Subtask subtask,
                                    const sim::SubtaskPolicies& prefix, sim::SubtaskPolicy& expert,
                                    const ExplorationNoise* noise, std::uint64_t episode_seed,
                                    Rng& noise_rng);
 
 // One end-to-end training episode: the policy acts on the episode goal for all 50 steps
 // (objective "task"); the whole episode is one segment.
-SubtaskEpisode run_end_to_end_episode(sim::PickPlaceEnv& env, sim::SubtaskPolicy& policy,
+SubtaskEpisode run_end_to_end_episode(sim::Environment& env, sim::SubtaskPolicy& policy,
                                       const ExplorationNoise& noise, std::uint64_t episode_seed,
                                       Rng& noise_rng);
 

@@ -77,7 +77,7 @@ double expert_stop_score(const CurvePoint& point, sim::Subtask subtask, bool end
              : std::min(point.task_success, point.subtask_success);
 }
 
-SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
+SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
                                            const SubtaskTrainingConfig& config,
                                            const ProgressCallback& progress) {
   config.ddpg.validate();
@@ -89,15 +89,15 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
   const bool end_to_end = config.algorithm == ExpertAlgorithm::kEndToEnd;
   const sim::Objective objective =
       end_to_end ? sim::Objective::kTask : sim::objective_of(config.subtask);
-  const double object_width = 2 * world->object_spec().half_width_m;
+  const double object_width = envs.object_width_m();
   SegmentReplay replay(config.ddpg.buffer_size, objective, object_width,
                        end_to_end ? RewardKind::kSparse : RewardKind::kDense);
   Rng sample_rng(stream_seed(config.seed, Stream::kReplaySampling));
   ThreadPool pool(config.threads);
 
   const auto episodes_per_cycle = static_cast<std::size_t>(config.ddpg.episodes_per_cycle);
-  std::vector<sim::PickPlaceEnv> envs;
-  for (std::size_t i = 0; i < episodes_per_cycle; ++i) envs.emplace_back(world);
+  std::vector<std::unique_ptr<sim::Environment>> rollout_envs;
+  for (std::size_t i = 0; i < episodes_per_cycle; ++i) rollout_envs.push_back(envs.make());
   const ExplorationNoise noise{config.ddpg.noise_eps, config.ddpg.random_eps,
                                config.ddpg.random_gripper, config.ddpg.learn_gripper};
   const double future_p = future_probability(config.ddpg.her_k);
@@ -135,11 +135,11 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
     std::vector<SubtaskEpisode> demo(demos);
     pool.parallel_for(demos, [&](std::size_t i) {
-      sim::PickPlaceEnv env(world);
+      const auto env = envs.make();
       sim::ScriptedPolicy teacher;
       const PrefixPolicies prefix(config.prefix);
       Rng unused(0);
-      demo[i] = run_subtask_episode(env, config.subtask, prefix.get(), teacher, nullptr,
+      demo[i] = run_subtask_episode(*env, config.subtask, prefix.get(), teacher, nullptr,
                                     derive_seed(episode_stream, i), unused);
     });
     for (const SubtaskEpisode& e : demo) {
@@ -174,11 +174,11 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
       const auto index = static_cast<std::uint64_t>(first_episode) + i;
       Rng noise_rng(derive_seed(noise_stream, index));
       if (end_to_end) {
-        episodes[i] = run_end_to_end_episode(envs[i], actor, noise,
+        episodes[i] = run_end_to_end_episode(*rollout_envs[i], actor, noise,
                                              derive_seed(episode_stream, index), noise_rng);
         return;
       }
-      episodes[i] = run_subtask_episode(envs[i], config.subtask, prefix.get(), actor,
+      episodes[i] = run_subtask_episode(*rollout_envs[i], config.subtask, prefix.get(), actor,
                                         offline ? nullptr : &noise,
                                         derive_seed(episode_stream, index), noise_rng);
       if (config.algorithm == ExpertAlgorithm::kBcOnline) {
@@ -224,7 +224,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
     CurvePoint point;
     if (end_to_end) {
       const EndToEndReport report =
-          evaluate_end_to_end(world, learned, config.stop.eval_episodes, eval_stream, pool);
+          evaluate_end_to_end(envs, learned, config.stop.eval_episodes, eval_stream, pool);
       result.eval_env_steps += report.env_steps;
       point.task_success = point.subtask_success = report.success_rate;
     } else {
@@ -237,7 +237,7 @@ SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::Worl
       }
       experts[static_cast<std::size_t>(config.subtask)] = &learned;
       const auto report =
-          sim::evaluate_pipeline(world, experts, config.stop.eval_episodes, eval_stream, pool);
+          sim::evaluate_pipeline(envs, experts, config.stop.eval_episodes, eval_stream, pool);
       result.eval_env_steps += report.env_steps;
       point.task_success = report.success_rate;
       point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];

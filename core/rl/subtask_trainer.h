@@ -16,7 +16,7 @@
 #include "rl/expert_checkpoint.h"
 #include "rl/training_progress.h"
 #include "sim/subtask_policy.h"
-#include "sim/world_model.h"
+#include "sim/env_factory.h"
 
 namespace pnp::rl {
 
@@ -56,7 +56,7 @@ struct SubtaskTrainingOutput {
   std::unique_ptr<DdpgHerAgent> agent;
 };
 
-SubtaskTrainingOutput train_subtask_expert(const std::shared_ptr<const sim::WorldModel>& world,
+SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
                                            const SubtaskTrainingConfig& config,
                                            const ProgressCallback& progress = {});
 

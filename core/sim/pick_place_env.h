@@ -18,6 +18,7 @@
 #include <span>
 
 #include "common/rng.h"
+#include "sim/environment.h"
 #include "sim/gravity_compensation.h"
 #include "sim/mujoco_data.h"
 #include "sim/observation.h"
@@ -26,48 +27,26 @@
 
 namespace pnp::sim {
 
-enum class PhysicsFault {
-  kNone,
-  kUnstable,   // MuJoCo flagged a bad qpos/qvel/qacc (it may have reset its data)
-  kNonFinite,  // NaN or Inf in the state
-  kCapacity,   // contact or constraint buffer full: contacts were dropped
-  kEjected,    // the object moves impossibly fast or leaves the scene: a contact blew up
-};
-
-struct StepResult {
-  Observation observation;        // after the step (a fresh episode's after a fault)
-  Eigen::Vector3d achieved_goal;  // for the objective the step was scored on
-  double reward = 0;              // -||achieved - goal|| with the goal passed to step()
-  bool task_success = false;      // object within 0.05 m of the episode goal
-  bool objective_done = false;    // the objective's termination predicate
-  bool episode_over = false;      // the 50th step was taken (reset() before stepping again),
-                                  // or a fault ended it (a fresh episode has already begun)
-  PhysicsFault fault = PhysicsFault::kNone;
-};
-
-class PickPlaceEnv {
+class PickPlaceEnv final : public Environment {
  public:
   explicit PickPlaceEnv(std::shared_ptr<const WorldModel> world);
 
   // Starts an episode whose object and goal are drawn from `seed` alone.
-  const Observation& reset(std::uint64_t seed);
+  const Observation& reset(std::uint64_t seed) override;
 
   // action: 4 finite values; goal: 3 finite values (the goal the agent acts on, used for
   // the reward). Throws INVALID_ARGUMENT for bad input and FAILED_PRECONDITION before
   // reset() or after the episode's last step.
   StepResult step(std::span<const double> action, std::span<const double> goal,
-                  Objective objective);
-  StepResult step(const Action& action, const Goal& goal, Objective objective) {
-    return step(std::span<const double>(action.data(), kActionSize),
-                std::span<const double>(goal.data(), kGoalSize), objective);
-  }
+                  Objective objective) override;
+  using Environment::step;
 
-  const Observation& observation() const { return observation_; }
-  const Goal& episode_goal() const { return episode_goal_; }
-  TaskState task_state() const;
+  const Observation& observation() const override { return observation_; }
+  const Goal& episode_goal() const override { return episode_goal_; }
+  TaskState task_state() const override;
   Eigen::Vector3d objective_goal(Objective objective) const;
-  int elapsed_steps() const { return elapsed_steps_; }
-  bool needs_reset() const { return needs_reset_; }
+  int elapsed_steps() const override { return elapsed_steps_; }
+  bool needs_reset() const override { return needs_reset_; }
   const WorldModel& world() const { return *world_; }
 
   // Direct access for controllers built on this world (the robot controller stand-in)

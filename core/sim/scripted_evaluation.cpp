@@ -55,7 +55,7 @@ ScriptedEvalReport summarise(const std::vector<EpisodeOutcome>& outcomes) {
 
 }  // namespace
 
-ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& world,
+ScriptedEvalReport evaluate_pipeline(const EnvFactory& envs,
                                      const std::array<const SubtaskPolicy*, kNumSubtasks>& experts,
                                      long long episodes, std::uint64_t seed, ThreadPool& pool) {
   require_positive(episodes, "episodes");
@@ -64,7 +64,7 @@ ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& wo
   std::vector<EpisodeOutcome> outcomes(count);
   // Worker w runs episodes w, w + workers, ... on its own environment and policies.
   pool.parallel_for(workers, [&](std::size_t w) {
-    PickPlaceEnv env(world);
+    const auto env = envs.make();
     std::array<std::unique_ptr<SubtaskPolicy>, kNumSubtasks> own;
     SubtaskPolicies policies{};
     for (std::size_t k = 0; k < kNumSubtasks; ++k) {
@@ -72,12 +72,12 @@ ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& wo
       policies[k] = own[k].get();
     }
     for (std::size_t i = w; i < count; i += workers) {
-      outcomes[i] = run_pipeline_episode(env, policies, derive_seed(seed, i));
+      outcomes[i] = run_pipeline_episode(*env, policies, derive_seed(seed, i));
     }
   });
   ScriptedEvalReport report = summarise(outcomes);
-  report.robot = world->robot();
-  report.object = world->object();
+  report.robot = envs.robot();
+  report.object = envs.object();
   report.seed = seed;
   return report;
 }
@@ -87,7 +87,8 @@ ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long 
   require_positive(episodes, "episodes");
   ThreadPool pool(threads);
   const ScriptedPolicy scripted;
-  return evaluate_pipeline(WorldModel::load(robot, object), {&scripted, &scripted, &scripted},
+  return evaluate_pipeline(LocalEnvFactory(WorldModel::load(robot, object)),
+                           {&scripted, &scripted, &scripted},
                            episodes, seed, pool);
 }
 

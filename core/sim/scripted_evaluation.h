@@ -11,7 +11,7 @@
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/scripted_pipeline.h"
-#include "sim/world_model.h"
+#include "sim/env_factory.h"
 
 namespace pnp::sim {
 
@@ -39,7 +39,7 @@ ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long 
 
 // The same evaluation with any experts: each worker runs its own clone of each
 // prototype. Episode i uses derive_seed(seed, i).
-ScriptedEvalReport evaluate_pipeline(const std::shared_ptr<const WorldModel>& world,
+ScriptedEvalReport evaluate_pipeline(const EnvFactory& envs,
                                      const std::array<const SubtaskPolicy*, kNumSubtasks>& experts,
                                      long long episodes, std::uint64_t seed, ThreadPool& pool);
 

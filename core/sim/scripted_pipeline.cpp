@@ -5,7 +5,7 @@
 
 namespace pnp::sim {
 
-EpisodeOutcome run_pipeline_episode(PickPlaceEnv& env, const SubtaskPolicies& policies,
+EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& policies,
                                     std::uint64_t seed) {
   EpisodeOutcome out;
   env.reset(seed);
@@ -39,7 +39,7 @@ EpisodeOutcome run_pipeline_episode(PickPlaceEnv& env, const SubtaskPolicies& po
   return out;
 }
 
-EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed) {
+EpisodeOutcome run_scripted_episode(Environment& env, std::uint64_t seed) {
   ScriptedPolicy scripted;
   return run_pipeline_episode(env, {&scripted, &scripted, &scripted}, seed);
 }

@@ -8,7 +8,7 @@
 #include <array>
 #include <cstdint>
 
-#include "sim/pick_place_env.h"
+#include "sim/environment.h"
 #include "sim/subtask.h"
 #include "sim/subtask_policy.h"
 
@@ -26,10 +26,10 @@ struct EpisodeOutcome {
 
 using SubtaskPolicies = std::array<SubtaskPolicy*, kNumSubtasks>;
 
-EpisodeOutcome run_pipeline_episode(PickPlaceEnv& env, const SubtaskPolicies& policies,
+EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& policies,
                                     std::uint64_t seed);
 
 // All three experts scripted.
-EpisodeOutcome run_scripted_episode(PickPlaceEnv& env, std::uint64_t seed);
+EpisodeOutcome run_scripted_episode(Environment& env, std::uint64_t seed);
 
 }  // namespace pnp::sim

@@ -37,10 +37,16 @@ rl::ExpertAlgorithm expert_algorithm(const TrainingSpec& spec) {
   return rl::ExpertAlgorithm::kDdpgHer;
 }
 
+std::unique_ptr<sim::EnvFactory> environments(const TrainingSpec& spec,
+                                              const TrainingHooks& hooks) {
+  if (hooks.environments) return hooks.environments(spec.robot, spec.object);
+  return std::make_unique<sim::LocalEnvFactory>(sim::WorldModel::load(spec.robot, spec.object));
+}
+
 TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inputs,
                              const TrainingHooks& hooks, const std::string& code_commit) {
   const bool end_to_end = spec.role == "e2e";
-  const auto world = sim::WorldModel::load(spec.robot, spec.object);
+  const auto envs = environments(spec, hooks);
   std::optional<rl::LoadedExpert> init;
   if (!inputs.init.empty()) {
     init = rl::load_expert(inputs.init);
@@ -89,7 +95,7 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
       hooks.on_evaluation(p, save(agent, p.env_steps, p.task_success));
     };
   }
-  auto output = rl::train_subtask_expert(world, config, hooks.progress);
+  auto output = rl::train_subtask_expert(*envs, config, hooks.progress);
   TrainingOutcome out{std::move(output.result), {}};
   out.checkpoint = save(*output.agent, out.result.train_env_steps, out.result.final_success);
   return out;
@@ -97,7 +103,7 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
 
 TrainingOutcome train_hlc(const TrainingSpec& spec, const TrainingInputs& inputs,
                           const TrainingHooks& hooks, const std::string& code_commit) {
-  const auto world = sim::WorldModel::load(spec.robot, spec.object);
+  const auto envs = environments(spec, hooks);
   std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks> experts;
   for (std::size_t k = 0; k < experts.size(); ++k)
     experts[k] = policy_from(inputs.experts[k], role_at(k), "experts[" + std::to_string(k) + "]");
@@ -125,7 +131,7 @@ TrainingOutcome train_hlc(const TrainingSpec& spec, const TrainingInputs& inputs
     };
   }
   auto output = rl::train_choreographer(
-      world, {experts[0].get(), experts[1].get(), experts[2].get()}, config, hooks.progress);
+      *envs, {experts[0].get(), experts[1].get(), experts[2].get()}, config, hooks.progress);
   TrainingOutcome out{std::move(output.result), {}};
   out.checkpoint = rl::save_choreographer(
       meta_at(out.result.train_env_steps, out.result.final_success), *output.net);

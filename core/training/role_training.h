@@ -6,10 +6,12 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "rl/training_progress.h"
+#include "sim/env_factory.h"
 #include "sim/subtask.h"
 #include "training/training_spec.h"
 
@@ -25,8 +27,14 @@ struct TrainingInputs {
   std::array<Blob, sim::kNumSubtasks> experts;
 };
 
+// Makes the environment factory for a world: where rollouts and evaluations run (remote
+// simulation services, say). Results do not depend on it.
+using EnvironmentSource =
+    std::function<std::unique_ptr<sim::EnvFactory>(sim::Robot, sim::ObjectShape)>;
+
 struct TrainingHooks {
   std::size_t threads = 0;  // rollout and evaluation threads (0: all cores); no effect on results
+  EnvironmentSource environments;  // empty: in this process
   rl::TrainingControl control;
   // After every evaluation: the point and the checkpoint of the weights it evaluated.
   std::function<void(const rl::CurvePoint&, const Blob&)> on_evaluation;

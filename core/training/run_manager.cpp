@@ -289,6 +289,7 @@ void RunManager::train(store::RunStore& store, std::int64_t run_id, std::stop_to
       inputs.experts[k] = store.load_checkpoint(refs.experts[k]).blob;
     TrainingHooks hooks;
     hooks.threads = options_.threads;
+    hooks.environments = options_.environments;
     // Resume: the last checkpoint's weights and the curve up to it.
     if (const auto latest = store.latest_checkpoint(run_id)) {
       inputs.init = store.load_checkpoint(latest->id).blob;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "store/run_store.h"
+#include "training/role_training.h"
 #include "training/training_spec.h"
 
 namespace pnp::training {
@@ -38,6 +39,7 @@ struct RunManagerOptions {
   std::string role;         // the one role this manager trains
   std::string code_commit;  // recorded with every run and checkpoint
   std::size_t threads = 0;  // trainer threads (0: all cores); results do not depend on it
+  EnvironmentSource environments{};  // where rollouts run (empty: in this process)
 };
 
 class RunManager {

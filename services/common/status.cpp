@@ -50,4 +50,30 @@ std::string_view status_code_name(grpc::StatusCode code) {
   return kNames[static_cast<std::size_t>(index)];
 }
 
+void throw_if_error(const grpc::Status& status, std::string_view what, std::string_view address) {
+  if (status.ok()) return;
+  const std::string message = std::string(what) + " (" + std::string(address) +
+                              "): " + std::string(status_code_name(status.error_code())) + ": " +
+                              status.error_message();
+  switch (status.error_code()) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      throw Error(ErrorCode::kInvalidArgument, message);
+    case grpc::StatusCode::NOT_FOUND:
+      throw Error(ErrorCode::kNotFound, message);
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      throw Error(ErrorCode::kFailedPrecondition, message);
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      throw Error(ErrorCode::kResourceExhausted, message);
+    case grpc::StatusCode::DATA_LOSS:
+      throw Error(ErrorCode::kDataLoss, message);
+    case grpc::StatusCode::CANCELLED:
+      throw Error(ErrorCode::kCancelled, message);
+    case grpc::StatusCode::UNAVAILABLE:
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      throw Error(ErrorCode::kUnavailable, message);
+    default:
+      throw Error(ErrorCode::kInternal, message);
+  }
+}
+
 }  // namespace pnp::services

@@ -16,6 +16,10 @@ grpc::StatusCode status_code(ErrorCode code);
 // The canonical name ("INVALID_ARGUMENT"); codes outside the canonical set read UNKNOWN.
 std::string_view status_code_name(grpc::StatusCode code);
 
+// The client's side: a failed call becomes an Error "<what> (<address>): <CODE>: <message>"
+// with the matching core code (a lost or slow server is UNAVAILABLE).
+void throw_if_error(const grpc::Status& status, std::string_view what, std::string_view address);
+
 template <typename Body>
 grpc::Status guarded(Body&& body) {
   try {

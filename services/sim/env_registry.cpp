@@ -6,7 +6,12 @@
 namespace pnp::services {
 
 void EnvBatch::reset(std::size_t k) {
-  envs[k].reset(derive_seed(derive_seed(seed, k), episodes[k]++));
+  reset(k, derive_seed(derive_seed(seed, k), episodes[k]));
+}
+
+void EnvBatch::reset(std::size_t k, std::uint64_t episode_seed) {
+  envs[k].reset(episode_seed);
+  ++episodes[k];
 }
 
 std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, std::uint64_t seed,

@@ -27,6 +27,8 @@ struct EnvBatch {
 
   // Starts the next episode of environment k: seeded from (seed, k, episode number).
   void reset(std::size_t k);
+  // Starts an episode of environment k from an explicit seed (a trainer's own stream).
+  void reset(std::size_t k, std::uint64_t episode_seed);
 };
 
 class EnvRegistry {

@@ -5,6 +5,7 @@
 
 #include "common/error.h"
 #include "services/common/convert.h"
+#include "services/common/sim_convert.h"
 #include "services/common/status.h"
 #include "sim/world_layout.h"
 
@@ -14,38 +15,6 @@ namespace {
 namespace sv1 = pnp::sim::v1;
 
 constexpr int kMaxRewardPairs = 100'000;
-
-sim::Objective objective_from_proto(sv1::Objective o, const std::string& field) {
-  switch (o) {
-    case sv1::OBJECTIVE_APPROACH:
-      return sim::Objective::kApproach;
-    case sv1::OBJECTIVE_MANIPULATE:
-      return sim::Objective::kManipulate;
-    case sv1::OBJECTIVE_RETRACT:
-      return sim::Objective::kRetract;
-    case sv1::OBJECTIVE_TASK:
-      return sim::Objective::kTask;
-    default:
-      throw_invalid_argument(field, "one of OBJECTIVE_APPROACH, _MANIPULATE, _RETRACT, _TASK",
-                             std::to_string(o));
-  }
-}
-
-sv1::PhysicsFault fault_to_proto(sim::PhysicsFault f) {
-  switch (f) {
-    case sim::PhysicsFault::kNone:
-      return sv1::PHYSICS_FAULT_NONE;
-    case sim::PhysicsFault::kUnstable:
-      return sv1::PHYSICS_FAULT_UNSTABLE;
-    case sim::PhysicsFault::kNonFinite:
-      return sv1::PHYSICS_FAULT_NON_FINITE;
-    case sim::PhysicsFault::kCapacity:
-      return sv1::PHYSICS_FAULT_CAPACITY;
-    case sim::PhysicsFault::kEjected:
-      return sv1::PHYSICS_FAULT_EJECTED;
-  }
-  return sv1::PHYSICS_FAULT_UNSPECIFIED;
-}
 
 std::size_t checked_index(int index, const EnvBatch& batch, const std::string& field) {
   if (index < 0 || static_cast<std::size_t>(index) >= batch.envs.size()) {
@@ -91,8 +60,20 @@ void reset_batch(EnvBatch& batch, const sv1::ResetRequest& request, sv1::ResetRe
         checked_index(request.indices(i), batch, "indices[" + std::to_string(i) + "]"));
   if (indices.empty())
     for (std::size_t k = 0; k < batch.envs.size(); ++k) indices.push_back(k);
-  for (std::size_t k : indices) {
-    batch.reset(k);
+  const auto seeds = request.episode_seeds();
+  if (!seeds.empty() && static_cast<std::size_t>(seeds.size()) != indices.size()) {
+    throw_invalid_argument(
+        "episode_seeds",
+        "none, or one per environment reset (" + std::to_string(indices.size()) + ")",
+        std::to_string(seeds.size()) + " seeds");
+  }
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    const std::size_t k = indices[i];
+    if (seeds.empty()) {
+      batch.reset(k);
+    } else {
+      batch.reset(k, seeds[static_cast<int>(i)]);
+    }
     fill_state(batch.envs[k], static_cast<int>(k), *response.add_states());
   }
 }
@@ -122,7 +103,7 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
     }
     plan.push_back({k, action_from_proto(a.action(), field + ".action"),
                     from_proto(a.goal(), field + ".goal"),
-                    objective_from_proto(a.objective(), field + ".objective")});
+                    from_proto(a.objective(), field + ".objective")});
   }
   for (const Planned& p : plan) {  // everything validated: now move
     const sim::StepResult r = batch.envs[p.index].step(p.action, p.goal, p.objective);
@@ -132,7 +113,7 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
     out->set_objective_done(r.objective_done);
     out->set_task_success(r.task_success);
     out->set_episode_over(r.episode_over);
-    out->set_fault(fault_to_proto(r.fault));
+    out->set_fault(to_proto(r.fault));
   }
 }
 

@@ -1,14 +1,18 @@
 // pnp-train-server: trains one role (TrainingService) in the background, writing runs,
 // learning curves and checkpoints to the store; resumes interrupted runs at start.
 //   --role approach  --address 127.0.0.1:50052  --db ./pnp.db (or $PNP_DB)  --threads 0
-//   [--metrics-address 127.0.0.1:9102]
+//   [--metrics-address 127.0.0.1:9102]  [--sim-address host:port]...  (rollouts on remote
+//   simulation services, round robin; default: in this process)
 
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <map>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "build_info.h"
+#include "clients/sim_client/remote_env_factory.h"
 #include "common/error.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
@@ -61,6 +65,10 @@ int main(int argc, char** argv) {
                  "host:port to listen on (port 0: any free port) [127.0.0.1:5005x by role]");
   app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
   app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
+  std::vector<std::string> sim_addresses;
+  app.add_option("--sim-address", sim_addresses,
+                 "a simulation service to run rollouts on (repeat for several; default: rollouts "
+                 "in this process)");
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
@@ -76,7 +84,14 @@ int main(int argc, char** argv) {
   const std::string name = "train-" + role;
   try {
     MetricsRegistry metrics;
-    pnp::training::RunManager manager({db, role, std::string(pnp::kCodeCommit), threads});
+    pnp::training::EnvironmentSource environments;
+    if (!sim_addresses.empty()) {
+      environments = [sim_addresses](pnp::sim::Robot robot, pnp::sim::ObjectShape object) {
+        return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object);
+      };
+    }
+    pnp::training::RunManager manager(
+        {db, role, std::string(pnp::kCodeCommit), threads, environments});
     TrainingServiceImpl service(manager);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
@@ -86,7 +101,8 @@ int main(int argc, char** argv) {
                            .metrics_address = metrics_address});
     TrainingGauges gauges(metrics, role);
     return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
-                                  std::chrono::milliseconds(1000), {{"db", db}, {"role", role}});
+                                  std::chrono::milliseconds(1000),
+                                  {{"db", db}, {"role", role}, {"sim_addresses", sim_addresses}});
   } catch (const pnp::Error& e) {
     log_event(name, "fatal", {{"error", e.what()}});
     return 1;

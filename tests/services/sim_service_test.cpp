@@ -78,6 +78,42 @@ TEST_F(SimServiceTest, TheSameSeedGivesTheSameEpisodesAsTheCore) {
   EXPECT_NE(a.states(0).episode_goal().x_m(), a.states(1).episode_goal().x_m());
 }
 
+TEST_F(SimServiceTest, ExplicitEpisodeSeedsGiveTheCoresEpisodes) {
+  const std::string id = create(3);
+  grpc::ClientContext c;
+  sv1::ResetRequest r;
+  sv1::ResetResponse out;
+  r.set_env_id(id);
+  r.add_indices(2);
+  r.add_indices(0);
+  r.add_episode_seeds(11);
+  r.add_episode_seeds(12);
+  ASSERT_TRUE(stub_->Reset(&c, r, &out).ok());
+  ASSERT_EQ(out.states_size(), 2);
+  pnp::sim::PickPlaceEnv env(
+      pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock));
+  for (int i = 0; i < 2; ++i) {
+    env.reset(static_cast<std::uint64_t>(11 + i));
+    EXPECT_EQ(out.states(i).index(), i == 0 ? 2 : 0);
+    EXPECT_EQ(out.states(i).episode_goal().x_m(), env.episode_goal().x());
+    for (int k = 0; k < pnp::sim::kObservationSize; ++k)
+      EXPECT_EQ(out.states(i).observation().values(k), env.observation()(k));
+  }
+}
+
+TEST_F(SimServiceTest, RefusesEpisodeSeedsThatDoNotMatchTheEnvironments) {
+  const std::string id = create(2);
+  grpc::ClientContext c;
+  sv1::ResetRequest r;
+  sv1::ResetResponse out;
+  r.set_env_id(id);
+  r.add_episode_seeds(1);  // two environments reset, one seed
+  const grpc::Status status = stub_->Reset(&c, r, &out);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("episode_seeds"), std::string::npos)
+      << status.error_message();
+}
+
 TEST_F(SimServiceTest, AScriptedEpisodeThroughTheServiceSucceeds) {
   const std::string id = create(1, 3);
   auto state = reset(id).states(0);

@@ -27,7 +27,7 @@ void add(MethodRun& run, std::string role, rl::TrainingResult result) {
 
 MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
                         const ExperimentSettings& s, const Progress& progress) {
-  const auto world = sim::WorldModel::load(s.robot, s.object);
+  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object));
   const std::string method = algorithm == rl::ExpertAlgorithm::kDdpgHer ? "ddpg_her" : "bc";
   MethodRun run{method, seed, {}, true, 0, 0, -1};
   std::vector<std::unique_ptr<rl::LearnedExpert>> experts;
@@ -71,7 +71,7 @@ MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
 
 MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
                          const Progress& progress) {
-  const auto world = sim::WorldModel::load(s.robot, s.object);
+  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object));
   MethodRun run{"e2e", seed, {}, true, 0, 0, -1};
   rl::SubtaskTrainingConfig config;
   config.algorithm = rl::ExpertAlgorithm::kEndToEnd;

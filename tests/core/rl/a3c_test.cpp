@@ -4,6 +4,7 @@
 #include "rl/a3c_trainer.h"
 #include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
+#include "sim/pick_place_env.h"
 
 namespace pnp::rl {
 namespace {
@@ -18,7 +19,7 @@ HlcTrainingOutput short_run(int workers) {
   config.stop.eval_episodes = 4;
   config.eval_threads = 2;
   const sim::ScriptedPolicy scripted;
-  return train_choreographer(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock),
+  return train_choreographer(sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
                              {&scripted, &scripted, &scripted}, config);
 }
 

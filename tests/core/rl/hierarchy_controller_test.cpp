@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "rl/a3c_trainer.h"
 #include "rl/hlc_episode.h"
+#include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {

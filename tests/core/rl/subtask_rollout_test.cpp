@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "rl/hlc_episode.h"
+#include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {

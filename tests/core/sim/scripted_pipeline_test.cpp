@@ -1,3 +1,4 @@
+#include "sim/pick_place_env.h"
 #include "sim/scripted_pipeline.h"
 
 #include <gtest/gtest.h>
