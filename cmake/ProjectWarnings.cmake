@@ -5,7 +5,10 @@ target_compile_options(pnp_project_options INTERFACE
   -Wunused -Woverloaded-virtual -Wconversion -Wsign-conversion -Wnull-dereference
   -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough -Werror
   # GCC 12 reports std::string concatenation as overlapping memcpy (GCC bug 105329).
-  $<$<AND:$<CXX_COMPILER_ID:GNU>,$<VERSION_LESS:$<CXX_COMPILER_VERSION>,13>>:-Wno-restrict>)
+  $<$<AND:$<CXX_COMPILER_ID:GNU>,$<VERSION_LESS:$<CXX_COMPILER_VERSION>,13>>:-Wno-restrict>
+  # GCC 12 with AVX-512 flags Eigen's inlined _mm512 intrinsics (their own `__Y = __Y`
+  # idiom) as maybe-uninitialized: a false positive inside the compiler's headers.
+  $<$<AND:$<CXX_COMPILER_ID:GNU>,$<VERSION_LESS:$<CXX_COMPILER_VERSION>,13>>:-Wno-maybe-uninitialized>)
 if(PNP_NATIVE)
   target_compile_options(pnp_project_options INTERFACE -march=native)
 endif()

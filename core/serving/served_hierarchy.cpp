@@ -1,7 +1,7 @@
 #include "serving/served_hierarchy.h"
 
 #include "common/error.h"
-#include "rl/learned_expert.h"
+#include "serving/batched_expert.h"
 
 namespace pnp::serving {
 namespace {
@@ -49,19 +49,25 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
       experts_(std::move(experts)),
       ids_(ids),
       robot_(sim::parse_robot(choreographer_.meta.robot, "choreographer checkpoint robot")),
-      object_(sim::parse_object(choreographer_.meta.object, "choreographer checkpoint object")) {
+      // The shape the hierarchy handles is the retract expert's: only retract (with its
+      // gripper closure) is fine-tuned for a new shape, the rest may come from another.
+      object_(sim::parse_object(experts_[2].meta.object, "retract checkpoint object")) {
   for (std::size_t k = 0; k < experts_.size(); ++k) {
     const auto& meta = experts_[k].meta;
     if (meta.role != kExpertRoles[k]) {
       throw_invalid_argument(std::string(kExpertRoles[k]) + " checkpoint",
                              std::string("role ") + kExpertRoles[k], "role " + meta.role);
     }
-    if (meta.robot != choreographer_.meta.robot || meta.object != choreographer_.meta.object) {
+    if (meta.robot != choreographer_.meta.robot) {
       throw_invalid_argument(std::string(kExpertRoles[k]) + " checkpoint",
-                             "the choreographer's world (" + choreographer_.meta.robot + ", " +
-                                 choreographer_.meta.object + ")",
-                             meta.robot + ", " + meta.object);
+                             "the choreographer's robot (" + choreographer_.meta.robot + ")",
+                             meta.robot);
     }
+  }
+  for (std::size_t k = 0; k < experts_.size(); ++k) {
+    const auto& e = experts_[k];
+    batchers_[k] = std::make_shared<ActorBatcher>(e.actor, e.observation_normalizer,
+                                                  e.goal_normalizer, e.meta.clip_obs);
   }
   give_back(make_controller());  // fail here, not in the first request, if anything is wrong
 }
@@ -69,13 +75,16 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
 std::unique_ptr<rl::HierarchyController> ServedHierarchy::make_controller() const {
   rl::HierarchyController::Experts experts;
   for (std::size_t k = 0; k < experts.size(); ++k) {
-    const auto& e = experts_[k];
-    experts[k] = std::make_unique<rl::LearnedExpert>(
-        rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
-        e.meta.learn_gripper);
+    experts[k] = std::make_unique<BatchedExpert>(batchers_[k], experts_[k].meta.learn_gripper);
   }
   return std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
                                                    2 * sim::object_spec(object_).half_width_m);
+}
+
+std::array<BatchStats, sim::kNumSubtasks> ServedHierarchy::batch_stats() const {
+  std::array<BatchStats, sim::kNumSubtasks> stats;
+  for (std::size_t k = 0; k < stats.size(); ++k) stats[k] = batchers_[k]->stats();
+  return stats;
 }
 
 void ServedHierarchy::give_back(std::unique_ptr<rl::HierarchyController> controller) const {

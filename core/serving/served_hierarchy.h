@@ -5,6 +5,8 @@
 // requests never share recurrent state or scratch space, and nothing is allocated per
 // request once the pool has warmed up. A server swaps in a new ServedHierarchy when a
 // checkpoint is promoted; leases taken on the old one keep it alive until returned.
+// The controllers share one ActorBatcher per expert: concurrent requests that run the
+// same subtask are answered by one batched forward pass.
 
 #include <array>
 #include <cstdint>
@@ -16,6 +18,7 @@
 #include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/hierarchy_controller.h"
+#include "serving/actor_batcher.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "store/run_store.h"
@@ -33,7 +36,8 @@ class ServedHierarchy : public std::enable_shared_from_this<ServedHierarchy> {
  public:
   // Loads the promoted checkpoints. FAILED_PRECONDITION naming the roles not promoted
   // yet; DATA_LOSS for a corrupted checkpoint; INVALID_ARGUMENT if the checkpoints were
-  // trained on different worlds.
+  // trained on different robots. The object served is the retract expert's (a retract
+  // fine-tuned for a new shape serves beside experts trained on another).
   static std::shared_ptr<const ServedHierarchy> load_promoted(store::RunStore& store);
   // The ids load_promoted would serve (without loading), or nullopt if a role is missing.
   static std::optional<ServedIds> promoted_ids(store::RunStore& store);
@@ -63,6 +67,8 @@ class ServedHierarchy : public std::enable_shared_from_this<ServedHierarchy> {
   const ServedIds& ids() const { return ids_; }
   sim::Robot robot() const { return robot_; }
   sim::ObjectShape object() const { return object_; }
+  // Per expert (approach, manipulate, retract): requests and batches served so far.
+  std::array<BatchStats, sim::kNumSubtasks> batch_stats() const;
 
  private:
   std::unique_ptr<rl::HierarchyController> make_controller() const;
@@ -70,6 +76,7 @@ class ServedHierarchy : public std::enable_shared_from_this<ServedHierarchy> {
 
   rl::LoadedChoreographer choreographer_;
   std::array<rl::LoadedExpert, sim::kNumSubtasks> experts_;
+  std::array<std::shared_ptr<ActorBatcher>, sim::kNumSubtasks> batchers_;
   ServedIds ids_;
   sim::Robot robot_;
   sim::ObjectShape object_;

@@ -5,6 +5,8 @@
 // radians) per step.
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
 
 namespace pnp::sim {
 
@@ -34,6 +36,12 @@ inline Eigen::Vector3d gripper_position(const Observation& o) {
 inline Eigen::Vector3d object_position(const Observation& o) {
   return o.segment<3>(obs::kObjectPos);
 }
+// The object-orientation entries: roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll).
+inline Eigen::Vector3d roll_pitch_yaw(const Eigen::Matrix3d& r) {
+  return {std::atan2(r(2, 1), r(2, 2)), std::asin(std::clamp(-r(2, 0), -1.0, 1.0)),
+          std::atan2(r(1, 0), r(0, 0))};
+}
+
 // Distance between the finger pads (m): the sum of the two finger joint positions.
 inline double finger_gap(const Observation& o) {
   return o(obs::kFingerPos) + o(obs::kFingerPos + 1);

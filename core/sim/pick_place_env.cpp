@@ -15,12 +15,9 @@ Eigen::Vector3d vec3(const mjtNum* p) {
   return {p[0], p[1], p[2]};
 }
 
-// Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll); `mat` is MuJoCo's row-major 3x3.
+// MuJoCo's 3x3 matrices are row-major.
 Eigen::Vector3d euler_from_matrix(const mjtNum* mat) {
-  const double roll = std::atan2(mat[7], mat[8]);
-  const double pitch = std::asin(std::clamp(-mat[6], -1.0, 1.0));
-  const double yaw = std::atan2(mat[3], mat[0]);
-  return {roll, pitch, yaw};
+  return roll_pitch_yaw(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(mat));
 }
 
 bool all_finite(const mjtNum* values, int n) {

@@ -83,6 +83,9 @@ int schema_version() {
 }
 
 void migrate(Database& db) {
+  // The version is read under the write lock: processes opening a new file together (the
+  // platform starts its services at once) must not both run the same migration.
+  Transaction tx(db);
   const int current = user_version(db);
   if (current > schema_version()) {
     throw Error(ErrorCode::kFailedPrecondition,
@@ -91,11 +94,10 @@ void migrate(Database& db) {
                     ": use a newer build");
   }
   for (int v = current; v < schema_version(); ++v) {
-    Transaction tx(db);
     db.execute(kMigrations[static_cast<std::size_t>(v)]);
     db.execute("PRAGMA user_version = " + std::to_string(v + 1));
-    tx.commit();
   }
+  tx.commit();
 }
 
 }  // namespace pnp::store

@@ -1,11 +1,16 @@
 #include "services/common/server_runtime.h"
 
+#include <fcntl.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <mutex>
 #include <thread>
 
 #include "common/error.h"
@@ -51,22 +56,47 @@ void ServerRuntime::shutdown(std::chrono::milliseconds grace) {
   server_->Wait();
 }
 
-void block_termination_signals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+namespace {
+
+// The write end of the self-pipe the signal handler reports to. Process-wide by nature (a
+// signal handler cannot be handed state); written once by catch_termination_signals.
+int signal_pipe_write_fd = -1;
+
+void on_termination_signal(int signal) {
+  const auto byte = static_cast<unsigned char>(signal);
+  [[maybe_unused]] const auto written = ::write(signal_pipe_write_fd, &byte, 1);
+}
+
+int signal_pipe_read_fd = -1;
+
+}  // namespace
+
+// A handler, not a blocked mask: threads started before main (OpenBLAS starts its pool
+// from a static constructor) never block anything, and a signal delivered to one of them
+// would otherwise take the default action and kill the server mid-drain.
+void catch_termination_signals() {
+  if (signal_pipe_write_fd >= 0) return;
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) throw_internal("cannot create the signal pipe");
+  signal_pipe_read_fd = fds[0];
+  signal_pipe_write_fd = fds[1];
+  struct sigaction action {};
+  action.sa_handler = on_termination_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGINT, &action, nullptr);
 }
 
 int wait_for_termination_signal() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  int signal = 0;
-  sigwait(&set, &signal);
-  return signal;
+  if (signal_pipe_read_fd < 0) throw_internal("catch_termination_signals() was not called");
+  unsigned char byte = 0;
+  for (;;) {
+    const auto n = ::read(signal_pipe_read_fd, &byte, 1);
+    if (n == 1) return byte;
+    if (n < 0 && errno == EINTR) continue;
+    throw_internal("the signal pipe closed");
+  }
 }
 
 int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
@@ -80,8 +110,13 @@ int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
   std::fflush(stdout);
   {
     std::jthread background([&](std::stop_token stop) {
-      while (!stop.stop_requested()) {
-        std::this_thread::sleep_for(period);
+      // Waits that a stop request ends at once: the drain does not wait out a period.
+      std::mutex mutex;
+      std::condition_variable_any wake;
+      std::unique_lock lock(mutex);
+      for (;;) {
+        wake.wait_for(lock, stop, period, [] { return false; });
+        if (stop.stop_requested()) return;
         periodic();
       }
     });

@@ -49,10 +49,10 @@ class ServerRuntime {
   int port_ = 0;
 };
 
-// Call first in main, before any thread starts: SIGTERM and SIGINT are then delivered
-// only to wait_for_termination_signal().
-void block_termination_signals();
-int wait_for_termination_signal();  // the signal number
+// Call first in main: from then on SIGTERM and SIGINT, whichever thread they land on, are
+// handed to wait_for_termination_signal() instead of ending the process.
+void catch_termination_signals();
+int wait_for_termination_signal();  // blocks until one arrives; the signal number
 
 // Announces the port (stdout's first line, for scripts that started the server on port 0,
 // and the log's "listening" event, with "metrics_port" when metrics are served),

@@ -13,7 +13,7 @@
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
-  block_termination_signals();
+  catch_termination_signals();
   CLI::App app{"Serve the promoted pick-and-place hierarchy", "pnp-inference-server"};
   std::string address = "127.0.0.1:50060";
   std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
@@ -38,9 +38,24 @@ int main(int argc, char** argv) {
                            // Interceptors cost every call: only when someone can scrape.
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address});
+    std::array<Gauge*, 3> batched_requests{}, batches{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Labels expert{
+          {"expert", std::string(pnp::sim::subtask_name(pnp::sim::kAllSubtasks[k]))}};
+      batched_requests[k] =
+          &metrics.gauge("pnp_inference_expert_requests",
+                         "expert forward passes requested (served hierarchy)", expert);
+      batches[k] = &metrics.gauge("pnp_inference_expert_batches",
+                                  "batched expert forward passes run (served hierarchy)", expert);
+    }
     return serve_until_terminated(
         runtime, "inference",
         [&] {
+          const auto stats = service.batch_stats();
+          for (std::size_t k = 0; k < 3; ++k) {
+            batched_requests[k]->set(static_cast<double>(stats[k].requests));
+            batches[k]->set(static_cast<double>(stats[k].batches));
+          }
           try {
             if (service.reload()) log_event("inference", "reloaded");
           } catch (const pnp::Error& e) {

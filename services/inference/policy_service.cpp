@@ -36,6 +36,11 @@ bool PolicyServiceImpl::reload() {
   return true;
 }
 
+std::array<serving::BatchStats, sim::kNumSubtasks> PolicyServiceImpl::batch_stats() const {
+  const auto served = served_.load();
+  return served ? served->batch_stats() : std::array<serving::BatchStats, sim::kNumSubtasks>{};
+}
+
 std::shared_ptr<const serving::ServedHierarchy> PolicyServiceImpl::served_or_unavailable() const {
   auto served = served_.load();
   if (!served) {

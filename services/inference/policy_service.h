@@ -5,6 +5,7 @@
 // reload that swaps the served hierarchy atomically: requests in flight and open sessions
 // finish on the one they started with, new ones get the new one, none is dropped.
 
+#include <array>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -24,6 +25,8 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
   // the hierarchy changed. A failure keeps the current one and is rethrown.
   bool reload();
   bool ready() const { return served_.load() != nullptr; }
+  // The served hierarchy's batching counters per expert (zeros when nothing is served).
+  std::array<serving::BatchStats, sim::kNumSubtasks> batch_stats() const;
 
   grpc::Status Predict(grpc::ServerContext* context, const policy::v1::PredictRequest* request,
                        policy::v1::PredictResponse* response) override;

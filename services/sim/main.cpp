@@ -11,7 +11,7 @@
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
-  block_termination_signals();
+  catch_termination_signals();
   CLI::App app{"Serve MuJoCo pick-and-place environments", "pnp-sim-server"};
   std::string address = "127.0.0.1:50051";
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")

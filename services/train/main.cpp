@@ -49,7 +49,7 @@ class TrainingGauges {
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
-  block_termination_signals();
+  catch_termination_signals();
   CLI::App app{"Train one role of the pick-and-place hierarchy as a service", "pnp-train-server"};
   // Conventional ports, one per role (deploy/ uses the same).
   const std::map<std::string, int> default_ports{{"approach", 50052},

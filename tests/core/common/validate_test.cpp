@@ -7,20 +7,12 @@
 #include <vector>
 
 #include "common/error.h"
+#include "support/refusal.h"
 
 namespace pnp {
 namespace {
 
-std::string refusal(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an INVALID_ARGUMENT";
-  return "";
-}
+using pnp::testing::refusal;
 
 TEST(Validate, WrongSizeNamesFieldAndSizes) {
   const std::vector<double> v{1, 2, 3};

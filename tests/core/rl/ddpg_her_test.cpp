@@ -146,9 +146,11 @@ SubtaskTrainingConfig small_approach_run(ExpertAlgorithm algorithm, std::uint64_
 }
 
 // A fast, fixed-seed version of subtask expert training: the approach expert reaches at
-// least 90% subtask (and task) success within a small budget.
+// least 90% subtask (and task) success within a small budget. The budget has slack: the
+// float rounding of -march=native differs between CPUs (AVX2, AVX-512), and with it the
+// exact curve (4000 steps sufficed on one machine, not on another).
 TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
-  SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kDdpgHer, 7, 4000);
+  SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kDdpgHer, 7, 6000);
   config.ddpg.demo_episodes = 0;  // learn from exploration alone
   const auto out = train_subtask_expert(
       sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)), config);

@@ -1,0 +1,120 @@
+// pnp-bench-gateway: the robot gateway's cycle (controller state -> inference -> frame
+// change and checks -> send) at the policy's 25 Hz against the controller stand-in in
+// real time, over loopback, for at least --cycles cycles; beside it, in the same run, the
+// gRPC floor: an empty unary RPC (Ping) on the same inference server. The served policy
+// is the checked-in Panda hierarchy (tests/data/panda_block), or --checkpoints DIR.
+//   cycle_p50_us, cycle_p99_us, missed_periods (cycles that overran 40 ms)
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "clients/robot_gateway/gateway_episode.h"
+#include "clients/robot_gateway/gateway_summary.h"
+#include "common/validate.h"
+#include "robot/gateway_config.h"
+#include "services/common/server_runtime.h"
+#include "services/inference/policy_service.h"
+#include "services/robot_sim/robot_controller_service.h"
+#include "store/checkpoint_import.h"
+#include "tools/common/cli.h"
+
+namespace {
+
+using namespace pnp;
+using Clock = std::chrono::steady_clock;
+
+std::string loopback(int port) {
+  return "127.0.0.1:" + std::to_string(port);
+}
+
+double ping_p50_us(int port, int calls) {
+  auto stub = policy::v1::PolicyService::NewStub(
+      grpc::CreateChannel(loopback(port), grpc::InsecureChannelCredentials()));
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(calls));
+  for (int k = 0; k < calls; ++k) {
+    grpc::ClientContext context;
+    policy::v1::PingResponse response;
+    const auto start = Clock::now();
+    if (!stub->Ping(&context, {}, &response).ok()) throw std::runtime_error("Ping failed");
+    us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+  }
+  std::sort(us.begin(), us.end());
+  return us[us.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Robot gateway cycle latency against the controller stand-in in real time",
+               "pnp-bench-gateway"};
+  int cycles = 2000;
+  std::string checkpoints = PNP_DEFAULT_CHECKPOINTS;
+  std::string config_path = PNP_DEFAULT_GATEWAY_CONFIG;
+  std::uint64_t seed = 5000;
+  bool json = false;
+  app.add_option("--cycles", cycles, "at least this many gateway cycles")->capture_default_str();
+  app.add_option("--checkpoints", checkpoints, "directory with {approach,...,hlc}.ckpt (panda)")
+      ->capture_default_str();
+  app.add_option("--config", config_path, "gateway config")->capture_default_str();
+  app.add_option("--seed", seed, "first episode seed")->capture_default_str();
+  app.add_flag("--json", json, "print one JSON object");
+  return tools::run_tool(app, argc, argv, [&] {
+    require_positive(cycles, "--cycles");
+    const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("pnp_bench_gateway_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string db = (dir / "pnp.db").string();
+    {
+      store::RunStore store(db);
+      store::import_hierarchy(store, checkpoints, "panda", "block");
+    }
+    services::PolicyServiceImpl policy_service(db);
+    services::ServerRuntime policy_server({"127.0.0.1:0", 4 << 20, {&policy_service}, {}});
+    arm_sim::ControllerStandIn arm(arm_sim::StandInOptions{});  // real time, block
+    services::RobotControllerServiceImpl controller_service(arm);
+    services::SimulatedSceneServiceImpl scene_service(arm);
+    services::ServerRuntime controller_server(
+        {"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
+
+    gateway::ControllerLink controller(
+        grpc::CreateChannel(loopback(controller_server.port()), grpc::InsecureChannelCredentials()),
+        loopback(controller_server.port()), std::chrono::milliseconds(2000));
+    auto policy_stub = policy::v1::PolicyService::NewStub(
+        grpc::CreateChannel(loopback(policy_server.port()), grpc::InsecureChannelCredentials()));
+    controller.acquire_lease("pnp-bench-gateway", std::chrono::milliseconds(1000));
+    gateway::GatewayEpisodeRunner runner(config, controller, *policy_stub,
+                                         [](std::string_view, const nlohmann::json&) {});
+    const double floor_before = ping_p50_us(policy_server.port(), 500);
+    std::vector<gateway::EpisodeReport> reports;
+    std::size_t done = 0;
+    const std::atomic<bool> never{false};
+    const auto start = Clock::now();
+    while (done < static_cast<std::size_t>(cycles)) {
+      gateway::EpisodeOptions options;
+      options.seed = seed + reports.size();
+      reports.push_back(runner.run(options, never));
+      done += reports.back().cycle_us.size();
+    }
+    const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const double floor_after = ping_p50_us(policy_server.port(), 500);
+    controller.release_lease();
+    policy_server.shutdown(std::chrono::milliseconds(500));
+    controller_server.shutdown(std::chrono::milliseconds(500));
+    std::filesystem::remove_all(dir);
+
+    nlohmann::json out = gateway::summarize(reports);
+    const double floor = std::min(floor_before, floor_after);
+    out["floor_p50_us"] = floor;
+    out["cycle_p50_over_floor"] = out["cycle_p50_us"].get<double>() / floor;
+    out["wall_s"] = wall_s;
+    out["period_ms"] = config.policy_period_s * 1000;
+    std::cout << (json ? out.dump() : out.dump(2)) << "\n";
+  });
+}

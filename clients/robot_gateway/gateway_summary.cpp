@@ -1,0 +1,49 @@
+#include "clients/robot_gateway/gateway_summary.h"
+
+#include <algorithm>
+#include <map>
+#include <string>
+
+namespace pnp::gateway {
+namespace {
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1))];
+}
+
+}  // namespace
+
+nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
+  std::vector<double> cycles;
+  int successes = 0, missed = 0, refused = 0, controller_refused = 0, rate_limited = 0;
+  std::map<std::string, int> ends;
+  nlohmann::json seeds = nlohmann::json::array();
+  for (const EpisodeReport& e : episodes) {
+    cycles.insert(cycles.end(), e.cycle_us.begin(), e.cycle_us.end());
+    successes += e.success ? 1 : 0;
+    missed += e.missed_periods;
+    refused += e.refused;
+    controller_refused += e.controller_refused;
+    rate_limited += e.rate_limited;
+    ++ends[std::string(episode_end_name(e.end))];
+    seeds.push_back(e.seed);
+  }
+  const auto n = static_cast<double>(std::max<std::size_t>(1, episodes.size()));
+  return {{"episodes", episodes.size()},
+          {"successes", successes},
+          {"success_rate", successes / n},
+          {"cycles", cycles.size()},
+          {"cycle_p50_us", percentile(cycles, 0.5)},
+          {"cycle_p99_us", percentile(cycles, 0.99)},
+          {"cycle_max_us", percentile(cycles, 1.0)},
+          {"missed_periods", missed},
+          {"refused_targets", refused},
+          {"rate_limited_targets", rate_limited},
+          {"controller_refusals", controller_refused},
+          {"ends", ends},
+          {"seeds", seeds}};
+}
+
+}  // namespace pnp::gateway

@@ -1,0 +1,201 @@
+#include "arm_sim/controller_stand_in.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "common/error.h"
+
+namespace pnp::arm_sim {
+namespace {
+
+using robot::LeaseBook;
+
+ControllerStatus status_of(TargetCode code) {
+  switch (code) {
+    case TargetCode::kAccepted:
+      return ControllerStatus::kOk;
+    case TargetCode::kInvalid:
+      return ControllerStatus::kInvalidTarget;
+    case TargetCode::kUnreachable:
+      return ControllerStatus::kUnreachable;
+    case TargetCode::kJointLimit:
+      return ControllerStatus::kJointLimit;
+    case TargetCode::kStopped:
+      return ControllerStatus::kStopped;
+  }
+  throw_internal("unknown target code");
+}
+
+LeaseBook::Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<LeaseBook::Clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+ControllerStandIn::ControllerStandIn(const StandInOptions& options)
+    : options_(options), arm_(sim::Robot::kPanda, options.object, options.arm) {
+  if (options_.base_frame_id.empty()) {
+    throw_invalid_argument("base_frame_id", "a frame name", "\"\"");
+  }
+  if (!(options_.default_lease_timeout_s > 0) ||
+      !(options_.max_lease_timeout_s >= options_.default_lease_timeout_s)) {
+    throw_invalid_argument("default_lease_timeout_s", "a positive time at most the maximum",
+                           std::to_string(options_.default_lease_timeout_s));
+  }
+  if (options_.clock == ClockMode::kRealTime) {
+    clock_thread_ = std::jthread([this](const std::stop_token& stop) { run_real_time(stop); });
+  }
+}
+
+ControllerStandIn::~ControllerStandIn() = default;
+
+// The arm's own loop: one control tick per millisecond of steady-clock time. When the
+// process is descheduled the ticks it owes run back to back (at most 20, then the
+// schedule restarts from now), so simulated time tracks wall time.
+void ControllerStandIn::run_real_time(const std::stop_token& stop) {
+  using Clock = std::chrono::steady_clock;
+  constexpr auto kTick = std::chrono::microseconds(1000);
+  constexpr int kMaxCatchUp = 20;
+  auto next = Clock::now() + kTick;
+  while (!stop.stop_requested()) {
+    std::this_thread::sleep_until(next);
+    int owed = 0;
+    const auto now = Clock::now();
+    while (next <= now && owed < kMaxCatchUp) {
+      next += kTick;
+      ++owed;
+    }
+    if (owed == kMaxCatchUp) next = now + kTick;
+    if (owed == 0) continue;
+    std::lock_guard lock(mutex_);
+    arm_.advance(kControlPeriod_s * owed);
+  }
+}
+
+ControllerStandIn::Lease ControllerStandIn::acquire_lease(const std::string& client,
+                                                          double timeout_s) {
+  const double t = timeout_s == 0 ? options_.default_lease_timeout_s : timeout_s;
+  if (!(t > 0) || t > options_.max_lease_timeout_s) {
+    throw_invalid_argument(
+        "timeout", "a duration in (0, " + std::to_string(options_.max_lease_timeout_s) + "] s",
+        std::to_string(timeout_s) + " s");
+  }
+  std::lock_guard lock(mutex_);
+  return {leases_.acquire(client, seconds(t), LeaseBook::Clock::now()), t};
+}
+
+void ControllerStandIn::release_lease(const std::string& lease_id) {
+  std::lock_guard lock(mutex_);
+  leases_.release(lease_id);
+}
+
+void ControllerStandIn::require_lease(const std::string& lease_id,
+                                      LeaseBook::Clock::time_point now) const {
+  if (!leases_.valid(lease_id, now)) {
+    const auto holder = leases_.holder(now);
+    throw Error(ErrorCode::kFailedPrecondition,
+                "lease_id: not the current lease" +
+                    (holder ? " (the arm is leased to \"" + *holder + "\")"
+                            : std::string(" (nobody holds one: acquire a lease)")));
+  }
+}
+
+void ControllerStandIn::open_stream(const std::string& lease_id) {
+  std::lock_guard lock(mutex_);
+  const auto now = LeaseBook::Clock::now();
+  require_lease(lease_id, now);
+  leases_.renew(lease_id, now);
+  last_sequence_ = 0;
+}
+
+std::optional<std::string> ControllerStandIn::target_error(const TargetRequest& target) const {
+  if (target.frame_id != options_.base_frame_id) {
+    return "frame_id: expected \"" + options_.base_frame_id + "\", got \"" + target.frame_id + "\"";
+  }
+  if (target.sequence <= last_sequence_) {
+    return "sequence: expected more than " + std::to_string(last_sequence_) + ", got " +
+           std::to_string(target.sequence);
+  }
+  if (!std::isfinite(target.max_speed_m_per_s) || target.max_speed_m_per_s < 0) {
+    return "max_speed_m_per_s: expected a non-negative speed (0: default), got " +
+           std::to_string(target.max_speed_m_per_s);
+  }
+  return std::nullopt;
+}
+
+ControllerReport ControllerStandIn::take_target(const std::string& lease_id,
+                                                const TargetRequest& target) {
+  std::lock_guard lock(mutex_);
+  ControllerStatus status = ControllerStatus::kOk;
+  std::vector<std::string> errors;
+  if (!leases_.renew(lease_id, LeaseBook::Clock::now())) {
+    status = ControllerStatus::kLeaseLost;
+    errors.emplace_back("lease_id: the lease expired or was taken over; the arm holds");
+  } else if (auto error = target_error(target)) {
+    status = ControllerStatus::kInvalidTarget;
+    errors.push_back(std::move(*error));
+  } else {
+    const TargetStatus taken = arm_.set_target(target.position_m, target.orientation,
+                                               target.gripper_width_m, target.max_speed_m_per_s);
+    status = status_of(taken.code);
+    if (taken.accepted()) {
+      last_sequence_ = target.sequence;
+    } else {
+      errors.push_back(taken.message);
+    }
+  }
+  if (options_.clock == ClockMode::kLockstep) arm_.advance(options_.arm.policy_period_s);
+  return report_locked(status, std::move(errors));
+}
+
+ControllerReport ControllerStandIn::report_locked(ControllerStatus status,
+                                                  std::vector<std::string> errors) const {
+  ControllerReport report;
+  report.arm = arm_.state();
+  report.sequence = last_sequence_;
+  report.status = status;
+  report.errors = std::move(errors);
+  if (status == ControllerStatus::kOk && report.arm.mode == ArmMode::kStopped) {
+    report.status = ControllerStatus::kStopped;
+    report.errors.push_back("emergency stop: " + stop_reason_);
+  }
+  return report;
+}
+
+ControllerReport ControllerStandIn::state() const {
+  std::lock_guard lock(mutex_);
+  return report_locked(ControllerStatus::kOk, {});
+}
+
+std::optional<std::string> ControllerStandIn::lease_holder() const {
+  std::lock_guard lock(mutex_);
+  return leases_.holder(LeaseBook::Clock::now());
+}
+
+ControllerReport ControllerStandIn::stop(const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  arm_.stop();
+  stop_reason_ = reason.empty() ? "no reason given" : reason;
+  return report_locked(ControllerStatus::kOk, {});
+}
+
+void ControllerStandIn::resume(const std::string& lease_id) {
+  std::lock_guard lock(mutex_);
+  require_lease(lease_id, LeaseBook::Clock::now());
+  arm_.resume();
+  stop_reason_.clear();
+}
+
+ControllerStandIn::SceneReset ControllerStandIn::reset_scene(const std::string& lease_id,
+                                                             std::uint64_t seed) {
+  std::lock_guard lock(mutex_);
+  require_lease(lease_id, LeaseBook::Clock::now());
+  if (arm_.state().mode == ArmMode::kStopped) {
+    throw_failed_precondition("the arm is emergency-stopped (" + stop_reason_ +
+                              "): resume it before resetting the scene");
+  }
+  const Episode episode = arm_.reset(seed);
+  return {report_locked(ControllerStatus::kOk, {}), episode.goal_base};
+}
+
+}  // namespace pnp::arm_sim

@@ -1,0 +1,117 @@
+#pragma once
+// What pnp-robot-sim serves: a SimulatedArm behind the rules a real arm's controller
+// enforces for its network side. One lease holder drives it; targets must name the base
+// frame and carry increasing sequence numbers; an E-stop (from anyone) is honoured at
+// once and lasts until the lease holder resumes. Thread-safe: every call takes the arm's
+// lock, held only for the call.
+//
+// Two clocks. Real time: a thread runs the 1 kHz control loop against the steady clock,
+// as the arm would, whatever the network does. Lockstep: the physics advances one policy
+// period for each target taken in, and not otherwise, so a gateway can run episodes as
+// fast as the computer allows (evaluations, tests) with the same physics.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <stop_token>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "arm_sim/simulated_arm.h"
+#include "robot/lease_book.h"
+
+namespace pnp::arm_sim {
+
+enum class ClockMode { kRealTime, kLockstep };
+
+struct StandInOptions {
+  sim::ObjectShape object = sim::ObjectShape::kBlock;
+  ClockMode clock = ClockMode::kRealTime;
+  std::string base_frame_id = "panda_link0";
+  double default_lease_timeout_s = 1.0;  // when a client asks for none
+  double max_lease_timeout_s = 60.0;
+  ArmControllerOptions arm;
+};
+
+// The outcome of a request, or the controller's condition, as the protocol reports it.
+enum class ControllerStatus {
+  kOk,
+  kInvalidTarget,
+  kUnreachable,
+  kJointLimit,
+  kStopped,
+  kLeaseLost
+};
+
+struct ControllerReport {
+  ArmState arm;
+  std::uint64_t sequence = 0;  // the last target taken in on the lease's stream
+  ControllerStatus status = ControllerStatus::kOk;
+  std::vector<std::string> errors;  // why, for any status but kOk
+};
+
+struct TargetRequest {
+  std::uint64_t sequence = 0;
+  std::string frame_id;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  double gripper_width_m = 0;
+  double max_speed_m_per_s = 0;
+};
+
+class ControllerStandIn {
+ public:
+  explicit ControllerStandIn(const StandInOptions& options);
+  ~ControllerStandIn();
+  ControllerStandIn(const ControllerStandIn&) = delete;
+  ControllerStandIn& operator=(const ControllerStandIn&) = delete;
+
+  struct Lease {
+    std::string id;
+    double timeout_s = 0;
+  };
+  // timeout_s 0: the default. INVALID_ARGUMENT for a timeout outside (0, max];
+  // FAILED_PRECONDITION naming the holder while someone else holds the lease.
+  Lease acquire_lease(const std::string& client, double timeout_s);
+  void release_lease(const std::string& lease_id);  // NOT_FOUND for an unknown lease
+
+  // A drive stream opens: INVALID_ARGUMENT unless `lease_id` is the current lease. The
+  // sequence numbering starts again.
+  void open_stream(const std::string& lease_id);
+  // One target of the stream opened with `lease_id`: taken in, or refused with a status
+  // (never an exception for bad target values). In lockstep the physics then advances
+  // one policy period, refused or not: time passes for a real arm too.
+  ControllerReport take_target(const std::string& lease_id, const TargetRequest& target);
+
+  ControllerReport state() const;
+  std::optional<std::string> lease_holder() const;
+
+  ControllerReport stop(const std::string& reason);  // anyone may
+  void resume(const std::string& lease_id);          // FAILED_PRECONDITION without the lease
+  struct SceneReset {
+    ControllerReport report;
+    Eigen::Vector3d goal_base;
+  };
+  SceneReset reset_scene(const std::string& lease_id, std::uint64_t seed);
+
+  const std::string& base_frame_id() const { return options_.base_frame_id; }
+  ClockMode clock() const { return options_.clock; }
+
+ private:
+  void require_lease(const std::string& lease_id, robot::LeaseBook::Clock::time_point now) const;
+  ControllerReport report_locked(ControllerStatus status, std::vector<std::string> errors) const;
+  std::optional<std::string> target_error(const TargetRequest& target) const;
+  void run_real_time(const std::stop_token& stop);
+
+  const StandInOptions options_;
+  mutable std::mutex mutex_;
+  SimulatedArm arm_;                 // guarded by mutex_
+  robot::LeaseBook leases_;          // guarded by mutex_
+  std::uint64_t last_sequence_ = 0;  // guarded by mutex_
+  std::string stop_reason_;          // guarded by mutex_
+  std::jthread clock_thread_;        // real time only; last member: stops first
+};
+
+}  // namespace pnp::arm_sim

@@ -1,0 +1,544 @@
+#include "arm_sim/simulated_arm.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "common/error.h"
+#include "common/rng.h"
+#include "sim/inverse_kinematics.h"
+#include "sim/subtask.h"
+#include "sim/task_sampler.h"
+#include "sim/world_layout.h"
+
+namespace pnp::arm_sim {
+namespace {
+
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using ArmVector = Eigen::Matrix<double, kJoints, 1>;
+using ArmMatrix = Eigen::Matrix<double, kJoints, kJoints>;
+using Jacobian = Eigen::Matrix<double, 6, kJoints>;
+
+constexpr double kUnitQuaternionTolerance = 1e-3;
+constexpr double kMaxIkStep_rad = 0.2;  // per iteration: keeps the linearisation valid
+
+std::size_t at(int index) {
+  return static_cast<std::size_t>(index);
+}
+
+Eigen::Vector3d vec3(const mjtNum* p) {
+  return {p[0], p[1], p[2]};
+}
+
+Eigen::Matrix3d rotation_from_mj(const mjtNum* mat) {
+  // MuJoCo's 3x3 matrices are row-major.
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(mat);
+}
+
+Eigen::Quaterniond quaternion_from_mj(const mjtNum* q) {
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]);  // MuJoCo stores w, x, y, z
+}
+
+void require_positive_option(double value, const char* field) {
+  if (!(std::isfinite(value) && value > 0)) {
+    throw_invalid_argument(field, "a positive finite number", std::to_string(value));
+  }
+}
+
+const ArmControllerOptions& validated(const ArmControllerOptions& o) {
+  require_positive_option(o.reference_frequency_rad_per_s, "reference_frequency_rad_per_s");
+  require_positive_option(o.natural_frequency_rad_per_s, "natural_frequency_rad_per_s");
+  require_positive_option(o.damping_ratio, "damping_ratio");
+  require_positive_option(o.ik_iterations_per_tick, "ik_iterations_per_tick");
+  require_positive_option(o.ik_damping, "ik_damping");
+  if (!(std::isfinite(o.ik_nullspace_gain_per_tick) && o.ik_nullspace_gain_per_tick >= 0 &&
+        o.ik_nullspace_gain_per_tick < 1)) {
+    throw_invalid_argument("ik_nullspace_gain_per_tick", "a number in [0, 1)",
+                           std::to_string(o.ik_nullspace_gain_per_tick));
+  }
+  require_positive_option(o.reach_ik_iterations, "reach_ik_iterations");
+  require_positive_option(o.reach_position_tolerance_m, "reach_position_tolerance_m");
+  require_positive_option(o.reach_rotation_tolerance_rad, "reach_rotation_tolerance_rad");
+  require_positive_option(o.joint_limit_margin_rad, "joint_limit_margin_rad");
+  require_positive_option(o.policy_period_s, "policy_period_s");
+  require_positive_option(o.default_max_speed_m_per_s, "default_max_speed_m_per_s");
+  require_positive_option(o.max_angular_speed_rad_per_s, "max_angular_speed_rad_per_s");
+  for (double v : o.velocity_limits_rad_per_s) {
+    require_positive_option(v, "velocity_limits_rad_per_s");
+  }
+  if (!(o.velocity_limit_fraction > 0 && o.velocity_limit_fraction <= 1)) {
+    throw_invalid_argument("velocity_limit_fraction", "a number in (0, 1]",
+                           std::to_string(o.velocity_limit_fraction));
+  }
+  for (double a : o.acceleration_limits_rad_per_s2) {
+    require_positive_option(a, "acceleration_limits_rad_per_s2");
+  }
+  for (double t : o.torque_limits_nm) require_positive_option(t, "torque_limits_nm");
+  return o;
+}
+
+std::shared_ptr<const sim::WorldModel> load_world(sim::Robot robot, sim::ObjectShape object) {
+  // The limits, base body and gains are the Panda's; Fetch has no real counterpart here.
+  if (robot != sim::Robot::kPanda) {
+    throw_invalid_argument("robot", "panda", std::string(sim::robot_name(robot)));
+  }
+  return sim::WorldModel::load(robot, object);
+}
+
+int require_id(const mjModel* m, mjtObj type, const char* name) {
+  const int id = mj_name2id(m, type, name);
+  if (id < 0) throw_internal(std::string("model is missing required element \"") + name + "\"");
+  return id;
+}
+
+TargetStatus refused(TargetCode code, std::string message) {
+  return {code, std::move(message), 0};
+}
+
+}  // namespace
+
+Pose SimulatedArm::Segment::at(double time_s) const {
+  const double s = duration_s > 0 ? std::clamp((time_s - start_s) / duration_s, 0.0, 1.0) : 1.0;
+  return {from_position + s * (to_position - from_position),
+          from_orientation.slerp(s, to_orientation)};
+}
+
+SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object,
+                           const ArmControllerOptions& options)
+    : options_(validated(options)), world_(load_world(robot, object)) {
+  // A private copy of the training model: the weld that drags the gripper to its mocap
+  // target is switched off (the joints are torque-driven instead) and the step is the
+  // controller's 1 ms.
+  model_.reset(mj_copyModel(nullptr, world_->mj()));
+  if (!model_) throw_internal("mj_copyModel failed: out of memory");
+  mjModel* m = model_.get();
+  m->eq_active[require_id(m, mjOBJ_EQUALITY, "gripper_follows_target")] = 0;
+  m->opt.timestep = kControlPeriod_s;
+  // The reachability check's second opinion: the same arm without joint limits.
+  unlimited_model_.reset(mj_copyModel(nullptr, m));
+  if (!unlimited_model_) throw_internal("mj_copyModel failed: out of memory");
+  for (int joint : world_->ids().arm_joints) unlimited_model_->jnt_limited[joint] = 0;
+  data_ = sim::make_data(m);
+  scratch_ = sim::make_data(m);
+
+  const sim::WorldIds& ids = world_->ids();
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const int joint = ids.arm_joints[j];
+    qpos_adr_[j] = m->jnt_qposadr[joint];
+    dof_adr_[j] = m->jnt_dofadr[joint];
+    lower_[j] = m->jnt_range[2 * joint] + options_.joint_limit_margin_rad;
+    upper_[j] = m->jnt_range[2 * joint + 1] - options_.joint_limit_margin_rad;
+    home_[j] = world_->home_qpos()[at(qpos_adr_[j])];
+  }
+  const auto nv = at(m->nv);
+  jacp_.assign(3 * nv, 0);
+  jacr_.assign(3 * nv, 0);
+  accel_.assign(nv, 0);
+  mass_accel_.assign(nv, 0);
+
+  // The base is fixed to the world: its pose is read once from the compiled model.
+  std::copy(world_->home_qpos().begin(), world_->home_qpos().end(), scratch_->qpos);
+  mj_kinematics(m, scratch_.get());
+  const int base_body = require_id(m, mjOBJ_BODY, "panda_link0");
+  Eigen::Matrix4d base_pose = Eigen::Matrix4d::Identity();
+  base_pose.topLeftCorner<3, 3>() = rotation_from_mj(scratch_->xmat + 9 * base_body);
+  base_pose.topRightCorner<3, 1>() = vec3(scratch_->xpos + 3 * base_body);
+  world_from_base_ = geometry::RigidTransform::from_matrix(base_pose, "panda_link0 pose");
+  base_from_world_ = world_from_base_.inverse();
+
+  reset(0);
+}
+
+Episode SimulatedArm::reset(std::uint64_t seed) {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  const sim::WorldIds& ids = world_->ids();
+  // As PickPlaceEnv::start_episode: home state, then the object and goal that the seed's
+  // stream samples first (PickPlaceEnv::reset reseeds its generator with the seed).
+  mj_resetData(m, d);
+  std::copy(world_->home_qpos().begin(), world_->home_qpos().end(), d->qpos);
+  std::copy(world_->home_qvel().begin(), world_->home_qvel().end(), d->qvel);
+  Rng rng(seed);
+  const sim::EpisodeLayout layout =
+      sim::sample_episode_layout(rng, world_->object_spec().half_height_m);
+  mjtNum* object_qpos = d->qpos + ids.object_qpos;
+  for (int k = 0; k < 3; ++k) object_qpos[k] = layout.object(k);
+  object_qpos[3] = 1;
+  object_qpos[4] = object_qpos[5] = object_qpos[6] = 0;
+  mju_zero(d->qvel + ids.object_dof, 6);
+  for (int k = 0; k < 3; ++k) {
+    d->mocap_pos[3 * ids.gripper_mocap + k] = sim::layout::kGripperStart(k);
+    d->mocap_pos[3 * ids.target_mocap + k] = layout.goal(k);
+  }
+  set_gripper(max_gripper_width_m());  // open, as the environment's fingers start
+  mj_forward(m, d);
+
+  episode_ = {layout.goal, base_from_world_.apply(layout.goal)};
+  hold_measured_pose();
+  torques_.fill(0);
+  mode_ = ArmMode::kIdle;
+  return episode_;
+}
+
+TargetStatus SimulatedArm::set_target(const Eigen::Vector3d& position_base_m,
+                                      const Eigen::Quaterniond& orientation_base,
+                                      double gripper_width_m, double max_speed_m_per_s) {
+  if (mode_ == ArmMode::kFault) {
+    return refused(TargetCode::kStopped, "the simulation became unstable: call reset()");
+  }
+  if (mode_ == ArmMode::kStopped) {
+    return refused(TargetCode::kStopped, "the arm is stopped: call resume() first");
+  }
+  if (!position_base_m.allFinite()) {
+    return refused(TargetCode::kInvalid,
+                   fmt::format("position_base_m: expected finite coordinates, got ({}, {}, {})",
+                               position_base_m.x(), position_base_m.y(), position_base_m.z()));
+  }
+  const double norm = orientation_base.norm();
+  if (!orientation_base.coeffs().allFinite() || std::abs(norm - 1.0) > kUnitQuaternionTolerance) {
+    return refused(TargetCode::kInvalid,
+                   fmt::format("orientation_base: expected a unit quaternion (norm within {} of "
+                               "1), got norm {}",
+                               kUnitQuaternionTolerance, norm));
+  }
+  if (!(std::isfinite(gripper_width_m) && gripper_width_m >= 0 &&
+        gripper_width_m <= max_gripper_width_m())) {
+    return refused(TargetCode::kInvalid,
+                   fmt::format("gripper_width_m: expected a width in [0, {}] m, got {}",
+                               max_gripper_width_m(), gripper_width_m));
+  }
+  if (!(std::isfinite(max_speed_m_per_s) && max_speed_m_per_s >= 0)) {
+    return refused(TargetCode::kInvalid,
+                   fmt::format("max_speed_m_per_s: expected a speed >= 0 (0: default), got {}",
+                               max_speed_m_per_s));
+  }
+  const Pose target = world_from_base_.apply(Pose{position_base_m, orientation_base.normalized()});
+
+  if (TargetStatus reach = check_reachable(target); !reach.accepted()) return reach;
+
+  // Accepted: a new segment from the current command, one policy period long unless the
+  // speed limits need longer. The IK restarts from the joint reference, whose TCP pose
+  // the segment starts at.
+  const double now = data_->time;
+  const Pose& from = commanded_world_;
+  ik_q_ = command_q_;
+  const double speed =
+      max_speed_m_per_s > 0 ? max_speed_m_per_s : options_.default_max_speed_m_per_s;
+  const double duration =
+      std::max({options_.policy_period_s, (target.position_m - from.position_m).norm() / speed,
+                from.orientation.angularDistance(target.orientation) /
+                    options_.max_angular_speed_rad_per_s});
+  segment_ = {from.position_m, target.position_m, from.orientation, target.orientation, now,
+              duration};
+  target_world_ = target;
+  set_gripper(gripper_width_m);
+  mode_ = ArmMode::kTracking;
+  return {TargetCode::kAccepted, "", duration};
+}
+
+TargetStatus SimulatedArm::check_reachable(const Pose& target) {
+  // A full solve from the measured posture, on the scratch data, within the joint limits.
+  const mjModel* m = model_.get();
+  mjData* s = scratch_.get();
+  const sim::WorldIds& ids = world_->ids();
+  const sim::IkTarget ik_target{target.position_m, target.orientation.toRotationMatrix()};
+  sim::IkOptions ik_options;
+  ik_options.max_iterations = options_.reach_ik_iterations;
+  std::copy(data_->qpos, data_->qpos + m->nq, s->qpos);
+  const sim::IkResult ik =
+      sim::solve_site_ik(m, s, ids.grip_site, ids.arm_joints, ik_target, home_, ik_options);
+  const auto joint_outside = [&](double margin) -> std::optional<std::size_t> {
+    for (std::size_t j = 0; j < at(kJoints); ++j) {
+      const double q = s->qpos[qpos_adr_[j]];
+      if (q < lower_[j] - margin || q > upper_[j] + margin) return j;
+    }
+    return std::nullopt;
+  };
+  const auto at_limit = [&](std::size_t j) {
+    const double margin = options_.joint_limit_margin_rad;
+    return fmt::format("panda_joint{} at {:.4f} rad, range [{:.4f}, {:.4f}]", j + 1,
+                       s->qpos[qpos_adr_[j]], lower_[j] - margin, upper_[j] + margin);
+  };
+  const bool converged = ik.position_error_m <= options_.reach_position_tolerance_m &&
+                         ik.rotation_error_rad <= options_.reach_rotation_tolerance_rad;
+  if (converged) {
+    // solve_site_ik clamps to the model's range, so a solution that needs a joint beyond
+    // it ends exactly on the limit (lower_/upper_ sit the margin inside).
+    if (const auto j = joint_outside(0)) {
+      return refused(TargetCode::kJointLimit, "target needs " + at_limit(*j));
+    }
+    return {};
+  }
+  // Not within the limits: a joint limit is to blame if the same solve without limits
+  // succeeds; otherwise the pose is out of the arm's reach.
+  std::copy(data_->qpos, data_->qpos + m->nq, s->qpos);
+  const sim::IkResult unlimited = sim::solve_site_ik(unlimited_model_.get(), s, ids.grip_site,
+                                                     ids.arm_joints, ik_target, home_, ik_options);
+  if (unlimited.position_error_m <= options_.reach_position_tolerance_m &&
+      unlimited.rotation_error_rad <= options_.reach_rotation_tolerance_rad) {
+    if (const auto j = joint_outside(options_.joint_limit_margin_rad)) {
+      return refused(TargetCode::kJointLimit,
+                     "target needs " + at_limit(*j) + " (it is reachable only past that limit)");
+    }
+  }
+  return refused(
+      TargetCode::kUnreachable,
+      fmt::format("target out of reach: inverse kinematics stops {:.4f} m and "
+                  "{:.4f} rad away (tolerance {} m, {} rad)",
+                  ik.position_error_m, ik.rotation_error_rad, options_.reach_position_tolerance_m,
+                  options_.reach_rotation_tolerance_rad));
+}
+
+void SimulatedArm::advance(double seconds) {
+  if (!(std::isfinite(seconds) && seconds >= 0)) {
+    throw_invalid_argument("seconds", "a finite duration >= 0", std::to_string(seconds));
+  }
+  if (mode_ == ArmMode::kFault) return;  // frozen until reset(); state() reports it
+  // Whole ticks; the slack absorbs the rounding of e.g. 0.04 / 0.001.
+  const auto ticks = static_cast<long long>(std::floor(seconds / kControlPeriod_s + 1e-6));
+  for (long long i = 0; i < ticks; ++i) {
+    tick();
+    if (physics_faulted()) {
+      mode_ = ArmMode::kFault;
+      break;
+    }
+  }
+  refresh_derived();
+  commanded_world_ = forward_kinematics(command_q_);
+}
+
+void SimulatedArm::tick() {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  // step1 computes the current state's kinematics, mass matrix and bias forces; the
+  // torques written between step1 and step2 act on this very step.
+  mj_step1(m, d);
+  if (mode_ != ArmMode::kStopped) update_joint_command();
+  apply_joint_torques();
+  mj_step2(m, d);
+}
+
+void SimulatedArm::update_joint_command() {
+  const double next_time = data_->time + kControlPeriod_s;
+  const JointVector previous_ik = ik_q_;
+  ik_iterations(segment_.at(next_time));
+  const double dt = kControlPeriod_s;
+  const double w = options_.reference_frequency_rad_per_s;
+  // Critically damped tracking of the IK solution's position and velocity. Acceleration
+  // and velocity are each scaled down as a whole vector when a joint would exceed its
+  // limit, never clipped joint by joint: clipping one joint would bend the TCP's path
+  // (on this arm, a fast move in x saturates joints 1 and 3, and clipping only them
+  // dips the gripper towards the table).
+  ArmVector accel;
+  double accel_scale = 1;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    const double ik_velocity = (ik_q_[j] - previous_ik[j]) / dt;
+    accel(i) = w * w * (ik_q_[j] - command_q_[j]) + 2 * w * (ik_velocity - command_qd_[j]);
+    const double limit = options_.acceleration_limits_rad_per_s2[j];
+    if (std::abs(accel(i)) > limit) accel_scale = std::min(accel_scale, limit / std::abs(accel(i)));
+  }
+  ArmVector velocity;
+  double velocity_scale = 1;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    velocity(i) = command_qd_[j] + accel_scale * accel(i) * dt;
+    const double limit = options_.velocity_limit_fraction * options_.velocity_limits_rad_per_s[j];
+    if (std::abs(velocity(i)) > limit) {
+      velocity_scale = std::min(velocity_scale, limit / std::abs(velocity(i)));
+    }
+  }
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    double qd = velocity_scale * velocity(static_cast<Eigen::Index>(j));
+    double q = command_q_[j] + qd * dt;
+    if (q < lower_[j] || q > upper_[j]) {  // only an overshoot gets here: stop at the limit
+      q = std::clamp(q, lower_[j], upper_[j]);
+      qd = 0;
+    }
+    command_qdd_[j] = (qd - command_qd_[j]) / dt;
+    command_qd_[j] = qd;
+    command_q_[j] = q;
+  }
+  if (mode_ == ArmMode::kTracking && segment_.finished(next_time)) mode_ = ArmMode::kHolding;
+}
+
+void SimulatedArm::ik_iterations(const Pose& setpoint_world) {
+  const mjModel* m = model_.get();
+  mjData* s = scratch_.get();
+  const int site = world_->ids().grip_site;
+  const Eigen::Matrix3d desired = setpoint_world.orientation.toRotationMatrix();
+  for (int it = 0; it < options_.ik_iterations_per_tick; ++it) {
+    for (std::size_t j = 0; j < at(kJoints); ++j) s->qpos[qpos_adr_[j]] = ik_q_[j];
+    mj_kinematics(m, s);
+    mj_comPos(m, s);  // mj_jacSite needs cdof and subtree_com
+    Vector6 error;
+    error.head<3>() = setpoint_world.position_m - vec3(s->site_xpos + 3 * site);
+    error.tail<3>() = sim::rotation_error(desired, rotation_from_mj(s->site_xmat + 9 * site));
+    mj_jacSite(m, s, jacp_.data(), jacr_.data(), site);
+    Jacobian jac;
+    ArmVector to_home;
+    const auto nv = at(m->nv);
+    for (std::size_t j = 0; j < at(kJoints); ++j) {
+      const auto dof = at(dof_adr_[j]);
+      const auto col = static_cast<Eigen::Index>(j);
+      for (std::size_t r = 0; r < 3; ++r) {
+        jac(static_cast<Eigen::Index>(r), col) = jacp_[r * nv + dof];
+        jac(static_cast<Eigen::Index>(r + 3), col) = jacr_[r * nv + dof];
+      }
+      to_home(col) = home_[j] - ik_q_[j];
+    }
+    // Damped pseudo-inverse, and a slow pull towards the home posture in the null space
+    // so the redundant elbow does not wander over an episode.
+    const Matrix6 jjt = jac * jac.transpose() + options_.ik_damping * Matrix6::Identity();
+    const Eigen::Matrix<double, kJoints, 6> pinv =
+        jac.transpose() * jjt.ldlt().solve(Matrix6::Identity());
+    const ArmVector dq = pinv * error + (ArmMatrix::Identity() - pinv * jac) *
+                                            (options_.ik_nullspace_gain_per_tick * to_home);
+    for (std::size_t j = 0; j < at(kJoints); ++j) {
+      const double step =
+          std::clamp(dq(static_cast<Eigen::Index>(j)), -kMaxIkStep_rad, kMaxIkStep_rad);
+      ik_q_[j] = std::clamp(ik_q_[j] + step, lower_[j], upper_[j]);
+    }
+  }
+}
+
+void SimulatedArm::apply_joint_torques() {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  const double w = options_.natural_frequency_rad_per_s;
+  const double kp = w * w;
+  const double kd = 2 * options_.damping_ratio * w;
+  // Computed torque: the desired joint acceleration through the current mass matrix,
+  // plus Coriolis, centrifugal and gravity forces (qfrc_bias). accel_ is zero outside
+  // the arm's dofs, so mj_mulM yields the arm block times the arm accelerations.
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto dof = at(dof_adr_[j]);
+    accel_[dof] = command_qdd_[j] + kp * (command_q_[j] - d->qpos[qpos_adr_[j]]) +
+                  kd * (command_qd_[j] - d->qvel[dof]);
+  }
+  mj_mulM(m, d, mass_accel_.data(), accel_.data());
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto dof = at(dof_adr_[j]);
+    const double limit = options_.torque_limits_nm[j];
+    torques_[j] = std::clamp(mass_accel_[dof] + d->qfrc_bias[dof], -limit, limit);
+    d->qfrc_applied[dof] = torques_[j];
+  }
+}
+
+void SimulatedArm::refresh_derived() {
+  // mj_step leaves positions integrated but kinematics from before the last step.
+  mj_kinematics(model_.get(), data_.get());
+  mj_comPos(model_.get(), data_.get());
+}
+
+bool SimulatedArm::physics_faulted() const {
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
+  if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
+      d->warning[mjWARN_BADQACC].number > 0) {
+    return true;
+  }
+  const auto finite = [](mjtNum v) { return std::isfinite(v); };
+  return !std::all_of(d->qpos, d->qpos + m->nq, finite) ||
+         !std::all_of(d->qvel, d->qvel + m->nv, finite);
+}
+
+void SimulatedArm::stop() {
+  if (mode_ == ArmMode::kFault) return;
+  // Hold exactly the posture measured now; the interpolator and the IK are bypassed.
+  hold_measured_pose();
+  mode_ = ArmMode::kStopped;
+}
+
+void SimulatedArm::resume() {
+  if (mode_ != ArmMode::kStopped) return;
+  hold_measured_pose();
+  mode_ = ArmMode::kHolding;
+}
+
+void SimulatedArm::hold_measured_pose() {
+  command_q_ = measured_joints();
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    command_q_[j] = std::clamp(command_q_[j], lower_[j], upper_[j]);
+  }
+  command_qd_.fill(0);
+  command_qdd_.fill(0);
+  ik_q_ = command_q_;
+  commanded_world_ = forward_kinematics(command_q_);
+  target_world_ = commanded_world_;
+  segment_ = {commanded_world_.position_m,
+              commanded_world_.position_m,
+              commanded_world_.orientation,
+              commanded_world_.orientation,
+              data_->time,
+              0};
+}
+
+void SimulatedArm::set_gripper(double width_m) {
+  const mjModel* m = model_.get();
+  gripper_width_m_ = width_m;
+  // The fingers move symmetrically: each position actuator gets half the opening.
+  for (int actuator : world_->ids().finger_actuator) {
+    data_->ctrl[actuator] = std::clamp(width_m / 2, m->actuator_ctrlrange[2 * actuator],
+                                       m->actuator_ctrlrange[2 * actuator + 1]);
+  }
+}
+
+Pose SimulatedArm::forward_kinematics(const JointVector& q) {
+  const mjModel* m = model_.get();
+  mjData* s = scratch_.get();
+  for (std::size_t j = 0; j < at(kJoints); ++j) s->qpos[qpos_adr_[j]] = q[j];
+  mj_kinematics(m, s);
+  const int site = world_->ids().grip_site;
+  return {vec3(s->site_xpos + 3 * site),
+          Eigen::Quaterniond(rotation_from_mj(s->site_xmat + 9 * site)).normalized()};
+}
+
+Pose SimulatedArm::measured_tcp_world() const {
+  const int site = world_->ids().grip_site;
+  return {vec3(data_->site_xpos + 3 * site),
+          Eigen::Quaterniond(rotation_from_mj(data_->site_xmat + 9 * site)).normalized()};
+}
+
+JointVector SimulatedArm::measured_joints() const {
+  JointVector q{};
+  for (std::size_t j = 0; j < at(kJoints); ++j) q[j] = data_->qpos[qpos_adr_[j]];
+  return q;
+}
+
+ArmState SimulatedArm::state() const {
+  const mjData* d = data_.get();
+  const sim::WorldIds& ids = world_->ids();
+  ArmState s;
+  s.mode = mode_;
+  s.sim_time_s = d->time;
+  s.tcp_world = measured_tcp_world();
+  s.tcp_base = base_from_world_.apply(s.tcp_world);
+  s.commanded_base = base_from_world_.apply(commanded_world_);
+  s.setpoint_base = base_from_world_.apply(segment_.at(d->time));
+  s.target_base = base_from_world_.apply(target_world_);
+  s.finger_gap_m = d->qpos[ids.finger_qpos[0]] + d->qpos[ids.finger_qpos[1]];
+  s.commanded_gripper_width_m = gripper_width_m_;
+  s.object_world = {vec3(d->xpos + 3 * ids.object_body),
+                    quaternion_from_mj(d->xquat + 4 * ids.object_body).normalized()};
+  s.object_base = base_from_world_.apply(s.object_world);
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    s.joint_positions[j] = d->qpos[qpos_adr_[j]];
+    s.joint_velocities[j] = d->qvel[dof_adr_[j]];
+  }
+  s.joint_torques = torques_;
+  return s;
+}
+
+bool SimulatedArm::task_success() const {
+  const int body = world_->ids().object_body;
+  return sim::is_task_success(vec3(data_->xpos + 3 * body), episode_.goal_world);
+}
+
+}  // namespace pnp::arm_sim

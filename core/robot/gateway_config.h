@@ -1,0 +1,57 @@
+#pragma once
+// The robot gateway's settings: where the simulation's frame (the policy's) sits relative
+// to the arm's base, the safety limits every target is checked against, and the timing
+// the policy was trained with. Read from a JSON file (deploy/robot/gateway.json):
+//
+//   {"base_from_sim": [[1, 0, 0, -0.88], [0, 1, 0, -0.75], [0, 0, 1, -0.4], [0, 0, 0, 1]],
+//    "base_frame_id": "panda_link0",
+//    "limits": {"workspace": {"min_m": [x, y, z], "max_m": [x, y, z]}, "max_step_m": 0.1,
+//               "max_speed_m_per_s": 1.7, "max_rotation_step_rad": 0.2,
+//               "gripper_min_width_m": 0, "gripper_max_width_m": 0.08,
+//               "quaternion_norm_tolerance": 0.001},
+//    "policy_period_s": 0.04, "deadman_timeout_s": 0.1, "max_episode_steps": 50,
+//    "action_scale_m": 0.05}
+//
+// Every key but base_from_sim may be left out and takes the default below. base_from_sim
+// is required: a frame calibration silently defaulted would move a real arm to the wrong
+// place. Unknown keys are refused, so a misspelt limit cannot fall back to its default.
+
+#include <filesystem>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+#include "geometry/rigid_transform.h"
+#include "robot/safety_limits.h"
+#include "sim/world_layout.h"
+
+namespace pnp::robot {
+
+struct GatewayConfig {
+  // Maps simulation-world coordinates (policy observations and targets) into the robot's
+  // base frame. Identity only as a placeholder: from_json requires it.
+  geometry::RigidTransform base_from_sim;
+  std::string base_frame_id = "panda_link0";  // the controller's base frame name
+  SafetyLimits limits;                        // in the base frame
+  // The policy was trained with these; a different period changes what an action does.
+  double policy_period_s = sim::layout::kStepDuration_s;  // 0.04 s (25 Hz)
+  double deadman_timeout_s = 0.1;  // no fresh action for this long: the arm holds
+  int max_episode_steps = sim::layout::kEpisodeSteps;         // 50
+  double action_scale_m = sim::layout::kActionPositionScale;  // per axis, per step
+
+  // INVALID_ARGUMENT naming the key path (e.g. "limits.workspace.min_m[1]: expected a
+  // number, got \"a\"") for a wrong type, an unknown or missing-but-required key, or a
+  // value validate() refuses.
+  static GatewayConfig from_json(const nlohmann::json& json);
+  // from_json of the file's contents, each message prefixed with the path. NOT_FOUND when
+  // the file cannot be read, INVALID_ARGUMENT when it is not JSON.
+  static GatewayConfig load(const std::filesystem::path& path);
+  nlohmann::json to_json() const;  // every key, the form from_json reads
+
+  // INVALID_ARGUMENT naming the key: limits (SafetyLimits::validate), an empty
+  // base_frame_id, non-positive periods or counts, a dead-man timeout not longer than the
+  // policy period (it would trip every cycle), or an action scale above limits.max_step_m
+  // (a full action along one axis would be refused).
+  void validate() const;
+};
+
+}  // namespace pnp::robot

@@ -1,0 +1,60 @@
+// pnp-robot-sim: the robot controller stand-in. The simulated Panda of core/arm_sim behind
+// pnp.robot.v1.RobotControllerService (and SimulatedSceneService to start seeded
+// episodes), for driving with pnp-robot-gateway without hardware.
+//   --address 127.0.0.1:50070  --object block  --clock realtime|lockstep
+//   [--metrics-address 127.0.0.1:9107]
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+
+#include "common/error.h"
+#include "services/common/metrics_registry.h"
+#include "services/common/server_runtime.h"
+#include "services/robot_sim/robot_controller_service.h"
+
+int main(int argc, char** argv) {
+  using namespace pnp::services;
+  catch_termination_signals();
+  CLI::App app{"Simulated Franka Panda controller (1 kHz joint-space tracking)", "pnp-robot-sim"};
+  std::string address = "127.0.0.1:50070";
+  std::string object = "block";
+  std::string clock = "realtime";
+  std::string metrics_address;
+  app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
+      ->capture_default_str();
+  app.add_option("--object", object, "object on the table: block, cylinder or small_block")
+      ->capture_default_str();
+  app.add_option("--clock", clock,
+                 "realtime: the 1 kHz loop runs on the wall clock, as an arm does; lockstep: "
+                 "one policy period of physics per target (fast evaluations)")
+      ->check(CLI::IsMember({"realtime", "lockstep"}))
+      ->capture_default_str();
+  app.add_option("--metrics-address", metrics_address,
+                 "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    pnp::arm_sim::StandInOptions options;
+    options.object = pnp::sim::parse_object(object, "--object");
+    options.clock = clock == "lockstep" ? pnp::arm_sim::ClockMode::kLockstep
+                                        : pnp::arm_sim::ClockMode::kRealTime;
+    pnp::arm_sim::ControllerStandIn arm(options);
+    RobotControllerServiceImpl controller(arm);
+    SimulatedSceneServiceImpl scene(arm);
+    MetricsRegistry metrics;
+    ServerRuntime runtime({.address = address,
+                           .max_message_bytes = 1 << 20,
+                           .services = {&controller, &scene},
+                           .service_names = {"pnp.robot.v1.RobotControllerService",
+                                             "pnp.robot.v1.SimulatedSceneService"},
+                           .metrics = metrics_address.empty() ? nullptr : &metrics,
+                           .metrics_address = metrics_address});
+    return serve_until_terminated(
+        runtime, "robot_sim", [] {}, std::chrono::seconds(1),
+        {{"object", object}, {"clock", clock}, {"base_frame", arm.base_frame_id()}});
+  } catch (const pnp::Error& e) {
+    log_event("robot_sim", "fatal", {{"error", e.what()}});
+    std::fprintf(stderr, "pnp-robot-sim: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,48 @@
+#pragma once
+// pnp.robot.v1.RobotControllerService and SimulatedSceneService over the arm stand-in
+// (arm_sim::ControllerStandIn): the protocol's messages in, the stand-in's reports out.
+// A drive stream must open with a valid lease; each target is answered by exactly one
+// feedback message; a bad target is a status in its feedback, never a broken stream.
+
+#include "arm_sim/controller_stand_in.h"
+#include "pnp/robot/v1/robot_controller.grpc.pb.h"
+
+namespace pnp::services {
+
+class RobotControllerServiceImpl final : public robot::v1::RobotControllerService::Service {
+ public:
+  explicit RobotControllerServiceImpl(arm_sim::ControllerStandIn& arm) : arm_(arm) {}
+
+  grpc::Status AcquireLease(grpc::ServerContext* context,
+                            const robot::v1::AcquireLeaseRequest* request,
+                            robot::v1::AcquireLeaseResponse* response) override;
+  grpc::Status ReleaseLease(grpc::ServerContext* context,
+                            const robot::v1::ReleaseLeaseRequest* request,
+                            robot::v1::ReleaseLeaseResponse* response) override;
+  grpc::Status StreamPoseTargets(
+      grpc::ServerContext* context,
+      grpc::ServerReaderWriter<robot::v1::ControllerFeedback, robot::v1::StreamPoseTargetsRequest>*
+          stream) override;
+  grpc::Status GetState(grpc::ServerContext* context, const robot::v1::GetStateRequest* request,
+                        robot::v1::GetStateResponse* response) override;
+  grpc::Status Stop(grpc::ServerContext* context, const robot::v1::StopRequest* request,
+                    robot::v1::StopResponse* response) override;
+  grpc::Status Resume(grpc::ServerContext* context, const robot::v1::ResumeRequest* request,
+                      robot::v1::ResumeResponse* response) override;
+
+ private:
+  arm_sim::ControllerStandIn& arm_;
+};
+
+class SimulatedSceneServiceImpl final : public robot::v1::SimulatedSceneService::Service {
+ public:
+  explicit SimulatedSceneServiceImpl(arm_sim::ControllerStandIn& arm) : arm_(arm) {}
+
+  grpc::Status ResetScene(grpc::ServerContext* context, const robot::v1::ResetSceneRequest* request,
+                          robot::v1::ResetSceneResponse* response) override;
+
+ private:
+  arm_sim::ControllerStandIn& arm_;
+};
+
+}  // namespace pnp::services

@@ -1,0 +1,283 @@
+// Integration: a training service killed mid-run (SIGKILL, no chance to clean up) or
+// stopped (SIGTERM) leaves a consistent store, and when it starts again on the same file
+// the same run resumes from its last checkpoint with its learning curve intact.
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pnp/train/v1/train_service.grpc.pb.h"
+#include "tests/integration/child_process.h"
+#include "tests/integration/store_reader.h"
+
+namespace pnp::integration {
+namespace {
+
+namespace tv1 = pnp::train::v1;
+
+constexpr auto kGuard = 180s;  // failure guard on every wait, never an expectation
+
+// A run that trains until cancelled: a step cap far away, evaluations (each with its
+// checkpoint) every 200 steps, and learning rates so small that the policy stays as
+// initialised, so it cannot reach its target and stop by itself.
+tv1::CreateTrainingRunRequest endless_run() {
+  tv1::CreateTrainingRunRequest r;
+  r.set_role(pnp::common::v1::ROLE_APPROACH);
+  r.set_algorithm(tv1::ALGORITHM_DDPG_HER);
+  r.set_robot(pnp::common::v1::ROBOT_FETCH);
+  r.set_object(pnp::common::v1::OBJECT_SHAPE_BLOCK);
+  r.set_seed(7);
+  r.mutable_stop()->set_max_steps(10'000'000);
+  r.mutable_stop()->set_eval_interval_steps(200);
+  r.mutable_stop()->set_eval_episodes(4);
+  r.mutable_stop()->set_target_success(1.0);
+  auto& d = *r.mutable_ddpg();
+  d.add_hidden(32);
+  d.add_hidden(32);
+  d.set_batch_size(32);
+  d.set_buffer_size(20'000);
+  d.set_demo_episodes(0);
+  d.set_actor_learning_rate(1e-12);
+  d.set_critic_learning_rate(1e-12);
+  d.set_updates_per_transition(0.25);
+  return r;
+}
+
+// pnp-train-server --role approach over `db`, and a stub to it.
+class Trainer {
+ public:
+  Trainer(const TempDir& dir, const std::string& name)
+      : process_(name,
+                 {std::string(PNP_BIN_DIR) + "/pnp-train-server", "--role", "approach", "--address",
+                  "127.0.0.1:0", "--db", dir.file("pnp.db"), "--threads", "1"},
+                 dir.path()),
+        port_(process_.port()) {
+    if (port_ > 0) {
+      stub_ = tv1::TrainingService::NewStub(
+          grpc::CreateChannel(loopback(port_), grpc::InsecureChannelCredentials()));
+    }
+  }
+
+  ChildProcess& process() { return process_; }
+  bool started() const { return port_ > 0; }
+
+  tv1::TrainingRun create(const tv1::CreateTrainingRunRequest& request) {
+    tv1::CreateTrainingRunResponse response;
+    check(stub_->CreateTrainingRun(context().get(), request, &response), "CreateTrainingRun");
+    return response.run();
+  }
+  tv1::TrainingRun get(std::int64_t run_id) {
+    tv1::GetTrainingRunRequest request;
+    request.set_run_id(run_id);
+    tv1::GetTrainingRunResponse response;
+    check(stub_->GetTrainingRun(context().get(), request, &response), "GetTrainingRun");
+    return response.run();
+  }
+  std::vector<tv1::TrainingRun> list() {
+    tv1::ListTrainingRunsResponse response;
+    check(stub_->ListTrainingRuns(context().get(), {}, &response), "ListTrainingRuns");
+    return {response.runs().begin(), response.runs().end()};
+  }
+  std::vector<tv1::MetricPoint> metrics(std::int64_t run_id) {
+    tv1::GetRunMetricsRequest request;
+    request.set_run_id(run_id);
+    tv1::GetRunMetricsResponse response;
+    check(stub_->GetRunMetrics(context().get(), request, &response), "GetRunMetrics");
+    return {response.points().begin(), response.points().end()};
+  }
+  tv1::TrainingRun cancel(std::int64_t run_id) {
+    tv1::CancelTrainingRunRequest request;
+    request.set_run_id(run_id);
+    tv1::CancelTrainingRunResponse response;
+    check(stub_->CancelTrainingRun(context().get(), request, &response), "CancelTrainingRun");
+    return response.run();
+  }
+
+  // Drops the client channel, then SIGTERM: the exit status (empty if the guard passed).
+  std::optional<ExitStatus> stop() {
+    stub_.reset();
+    return process_.terminate_and_wait(kGuard);
+  }
+
+ private:
+  static std::unique_ptr<grpc::ClientContext> context() {
+    auto c = std::make_unique<grpc::ClientContext>();
+    c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    return c;
+  }
+  void check(const grpc::Status& status, const std::string& what) const {
+    if (!status.ok()) {
+      throw std::runtime_error(what + ": " + std::to_string(status.error_code()) + " " +
+                               status.error_message() + "\n" + process_.diagnostics());
+    }
+  }
+
+  ChildProcess process_;
+  int port_ = 0;
+  std::unique_ptr<tv1::TrainingService::Stub> stub_;
+};
+
+bool finished(const tv1::TrainingRun& run) {
+  return run.state() == tv1::RUN_STATE_SUCCEEDED || run.state() == tv1::RUN_STATE_FAILED ||
+         run.state() == tv1::RUN_STATE_CANCELLED;
+}
+
+// Waits until the run has at least `evaluations` evaluations (each with its checkpoint)
+// and returns their curve; fails the test if the run finishes first.
+std::vector<tv1::MetricPoint> wait_for_evaluations(Trainer& trainer, std::int64_t run_id,
+                                                   std::size_t evaluations) {
+  std::vector<tv1::MetricPoint> curve;
+  tv1::TrainingRun run;
+  const bool reached = wait_until(
+      [&] {
+        run = trainer.get(run_id);
+        curve = trainer.metrics(run_id);
+        return finished(run) || (curve.size() >= evaluations && run.latest_checkpoint_id() > 0 &&
+                                 run.state() == tv1::RUN_STATE_RUNNING);
+      },
+      kGuard, 50ms);
+  EXPECT_TRUE(reached) << trainer.process().diagnostics();
+  EXPECT_FALSE(finished(run)) << run.DebugString() << trainer.process().diagnostics();
+  return curve;
+}
+
+// The run's rows as stored, in curve order.
+std::vector<SqlRow> stored_metrics(const StoreReader& store, std::int64_t run_id) {
+  return store.rows("SELECT * FROM metrics WHERE run_id = ? ORDER BY env_steps", {run_id});
+}
+
+// What the store holds for an interrupted run: the run still RUNNING (to resume), every
+// evaluation with its checkpoint (they are written in one transaction, so no kill can
+// separate them), intact blobs, a sound file. Returns the curve and the last
+// checkpoint's steps.
+struct Interrupted {
+  std::vector<SqlRow> metrics;
+  long long checkpoint_steps = 0;
+};
+Interrupted check_interrupted_store(const std::string& db, std::int64_t run_id,
+                                    const std::vector<tv1::MetricPoint>& seen) {
+  const StoreReader store(db);
+  Interrupted out;
+  EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
+  EXPECT_EQ(store.text("SELECT state FROM runs WHERE id = ?", {run_id}), "running");
+  out.metrics = stored_metrics(store, run_id);
+  EXPECT_GE(out.metrics.size(), seen.size());
+  // Every evaluation a client was shown is on disk.
+  for (const auto& point : seen) {
+    EXPECT_EQ(store.integer("SELECT COUNT(*) FROM metrics WHERE run_id = ? AND env_steps = ?",
+                            {run_id, point.env_steps()}),
+              1)
+        << "evaluation at " << point.env_steps() << " lost";
+  }
+  // Evaluations and checkpoints pair up, step for step.
+  EXPECT_EQ(
+      store.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY env_steps", {run_id}),
+      store.rows("SELECT env_steps FROM metrics WHERE run_id = ? ORDER BY env_steps", {run_id}));
+  EXPECT_EQ(store.integer("SELECT COUNT(*) FROM checkpoints WHERE run_id = ? AND "
+                          "(length(blob) = 0 OR length(blob) != size_bytes)",
+                          {run_id}),
+            0);
+  out.checkpoint_steps = store.integer(
+      "SELECT COALESCE(MAX(env_steps), 0) FROM checkpoints WHERE run_id = ?", {run_id});
+  return out;
+}
+
+// Restarts the trainer on the same store and checks that the same run (and no other)
+// picks up again: new evaluations past its last checkpoint, continuing its episode
+// count; then cancels it, stops the service (exit 0), and checks that the curve from
+// before the interruption is on disk unchanged.
+void expect_resumes(const TempDir& dir, std::int64_t run_id, const Interrupted& before) {
+  Trainer second(dir, "train-second");
+  ASSERT_TRUE(second.started()) << second.process().diagnostics();
+  const auto runs = second.list();
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].run_id(), run_id);
+
+  std::vector<tv1::MetricPoint> curve;
+  tv1::TrainingRun run;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        run = second.get(run_id);
+        curve = second.metrics(run_id);
+        return finished(run) ||
+               (!curve.empty() && curve.back().env_steps() > before.checkpoint_steps);
+      },
+      kGuard, 50ms))
+      << second.process().diagnostics();
+  ASSERT_FALSE(finished(run)) << run.DebugString() << second.process().diagnostics();
+  EXPECT_EQ(run.state(), tv1::RUN_STATE_RUNNING);
+  ASSERT_GT(curve.size(), before.metrics.size());
+  // The first evaluation after the restart continues from the checkpoint, not from
+  // scratch: more steps and more episodes than the last one before it.
+  const auto& last_before = curve[before.metrics.size() - 1];
+  const auto& first_after = curve[before.metrics.size()];
+  EXPECT_EQ(last_before.env_steps(), before.checkpoint_steps);
+  EXPECT_GT(first_after.env_steps(), before.checkpoint_steps);
+  EXPECT_GT(first_after.episodes(), last_before.episodes());
+  EXPECT_GE(run.env_steps(), first_after.env_steps());
+
+  second.cancel(run_id);
+  ASSERT_TRUE(wait_until([&] { return finished(second.get(run_id)); }, kGuard, 50ms))
+      << second.process().diagnostics();
+  EXPECT_EQ(second.get(run_id).state(), tv1::RUN_STATE_CANCELLED);
+  const auto stopped = second.stop();
+  ASSERT_TRUE(stopped) << second.process().diagnostics();
+  EXPECT_TRUE(stopped->ok()) << second.process().diagnostics();
+
+  const StoreReader store(dir.file("pnp.db"));
+  EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
+  EXPECT_EQ(store.text("SELECT state FROM runs WHERE id = ?", {run_id}), "cancelled");
+  EXPECT_EQ(store.integer("SELECT COUNT(*) FROM runs"), 1);
+  const auto after = stored_metrics(store, run_id);
+  ASSERT_GT(after.size(), before.metrics.size());
+  for (std::size_t i = 0; i < before.metrics.size(); ++i)
+    EXPECT_EQ(after[i], before.metrics[i]) << "row " << i << " changed";
+}
+
+TEST(ResumeAfterKill, AKilledTrainerResumesTheSameRunFromItsLastCheckpoint) {
+  TempDir dir("resume_after_kill");
+  std::int64_t run_id = 0;
+  std::vector<tv1::MetricPoint> seen;
+  {
+    Trainer first(dir, "train-first");
+    ASSERT_TRUE(first.started()) << first.process().diagnostics();
+    run_id = first.create(endless_run()).run_id();
+    ASSERT_GT(run_id, 0);
+    seen = wait_for_evaluations(first, run_id, 2);
+    ASSERT_GE(seen.size(), 2u);
+    first.process().kill();
+    const auto status = first.process().wait(kGuard);
+    ASSERT_TRUE(status) << first.process().diagnostics();
+    EXPECT_EQ(status->describe(), "signal 9");
+  }
+  const Interrupted before = check_interrupted_store(dir.file("pnp.db"), run_id, seen);
+  ASSERT_GE(before.metrics.size(), 2u);
+  expect_resumes(dir, run_id, before);
+}
+
+TEST(ResumeAfterKill, ASigtermMidRunDrainsAndTheRunResumes) {
+  TempDir dir("resume_after_sigterm");
+  std::int64_t run_id = 0;
+  std::vector<tv1::MetricPoint> seen;
+  {
+    Trainer first(dir, "train-first");
+    ASSERT_TRUE(first.started()) << first.process().diagnostics();
+    run_id = first.create(endless_run()).run_id();
+    ASSERT_GT(run_id, 0);
+    seen = wait_for_evaluations(first, run_id, 1);
+    ASSERT_GE(seen.size(), 1u);
+    const auto status = first.stop();  // while the run trains
+    ASSERT_TRUE(status) << first.process().diagnostics();
+    EXPECT_TRUE(status->ok()) << first.process().diagnostics();
+  }
+  const Interrupted before = check_interrupted_store(dir.file("pnp.db"), run_id, seen);
+  ASSERT_GE(before.metrics.size(), 1u);
+  expect_resumes(dir, run_id, before);
+}
+
+}  // namespace
+}  // namespace pnp::integration
