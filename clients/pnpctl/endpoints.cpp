@@ -17,11 +17,13 @@ const std::string& Endpoints::training(const std::string& role) const {
 const std::string& Endpoints::address_of(const std::string& service) const {
   if (service == "sim") return sim;
   if (service == "inference") return inference;
+  if (service == "robot") return robot_controller;
   if (service == "approach" || service == "manipulate" || service == "retract" ||
       service == "hlc" || service == "e2e")
     return training(service);
-  throw_invalid_argument("service",
-                         "one of sim, approach, manipulate, retract, hlc, e2e, inference",
+  throw_invalid_argument("--only",
+                         "services among sim, approach, manipulate, retract, hlc, e2e, inference, "
+                         "robot",
                          "\"" + service + "\"");
 }
 
@@ -34,6 +36,9 @@ void add_endpoint_options(CLI::App& app, Endpoints& e) {
   app.add_option("--hlc", e.hlc, "choreographer training service")->capture_default_str();
   app.add_option("--e2e", e.e2e, "end-to-end training service")->capture_default_str();
   app.add_option("--inference", e.inference, "inference service address")->capture_default_str();
+  app.add_option("--robot-controller", e.robot_controller,
+                 "robot controller address (pnp-robot-sim); health --only robot")
+      ->capture_default_str();
 }
 
 }  // namespace pnp::pnpctl

@@ -15,10 +15,12 @@ struct Endpoints {
   std::string hlc = "127.0.0.1:50055";
   std::string e2e = "127.0.0.1:50056";
   std::string inference = "127.0.0.1:50060";
+  std::string robot_controller = "127.0.0.1:50070";  // not in kAllServices: not the platform's
 
   // The training service of a role; INVALID_ARGUMENT for an unknown role.
   const std::string& training(const std::string& role) const;
-  // Any service by name: sim, inference, or a role. INVALID_ARGUMENT otherwise.
+  // Any service by name: sim, inference, robot (the arm's controller), or a role.
+  // INVALID_ARGUMENT naming --only otherwise.
   const std::string& address_of(const std::string& service) const;
 };
 

@@ -96,6 +96,7 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
     }
     const auto start = Clock::now();
     const rv1::ControllerFeedback state = controller_.state().state();
+    report.state_us.push_back(micros(Clock::now() - start));
     if (state.mode() == rv1::CONTROLLER_MODE_FAULT) {
       end_with(EpisodeEnd::kControllerFault, "the controller reports a fault");
       break;
@@ -116,6 +117,7 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
     const auto asked = Clock::now();
     std::optional<Prediction> prediction;
     if (session.ask(observation, goal_sim)) prediction = session.answer(asked + deadman);
+    report.inference_us.push_back(micros(Clock::now() - asked));
     const geometry::Pose commanded_base = services::from_proto(state.commanded());
 
     rv1::PoseTarget target;

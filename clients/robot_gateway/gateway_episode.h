@@ -46,6 +46,7 @@ struct EpisodeReport {
   int controller_refused = 0;    // feedback with a status other than OK
   int missed_periods = 0;        // cycles that overran the policy period (paced only)
   std::vector<double> cycle_us;  // state -> inference -> transform -> send, per cycle
+  std::vector<double> state_us, inference_us;  // the cycle's first two phases
 };
 
 class GatewayEpisodeRunner {

@@ -16,12 +16,14 @@ double percentile(std::vector<double> values, double q) {
 }  // namespace
 
 nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
-  std::vector<double> cycles;
+  std::vector<double> cycles, state, inference;
   int successes = 0, missed = 0, refused = 0, controller_refused = 0, rate_limited = 0;
   std::map<std::string, int> ends;
   nlohmann::json seeds = nlohmann::json::array();
   for (const EpisodeReport& e : episodes) {
     cycles.insert(cycles.end(), e.cycle_us.begin(), e.cycle_us.end());
+    state.insert(state.end(), e.state_us.begin(), e.state_us.end());
+    inference.insert(inference.end(), e.inference_us.begin(), e.inference_us.end());
     successes += e.success ? 1 : 0;
     missed += e.missed_periods;
     refused += e.refused;
@@ -38,6 +40,8 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
           {"cycle_p50_us", percentile(cycles, 0.5)},
           {"cycle_p99_us", percentile(cycles, 0.99)},
           {"cycle_max_us", percentile(cycles, 1.0)},
+          {"state_p50_us", percentile(state, 0.5)},
+          {"inference_p50_us", percentile(inference, 0.5)},
           {"missed_periods", missed},
           {"refused_targets", refused},
           {"rate_limited_targets", rate_limited},

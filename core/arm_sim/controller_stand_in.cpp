@@ -32,6 +32,16 @@ LeaseBook::Clock::duration seconds(double s) {
 
 }  // namespace
 
+ControllerStandIn::CallerLock::CallerLock(const ControllerStandIn& arm) : arm_(arm) {
+  arm_.callers_waiting_.fetch_add(1, std::memory_order_acq_rel);
+  arm_.mutex_.lock();
+  arm_.callers_waiting_.fetch_sub(1, std::memory_order_acq_rel);
+}
+
+ControllerStandIn::CallerLock::~CallerLock() {
+  arm_.mutex_.unlock();
+}
+
 ControllerStandIn::ControllerStandIn(const StandInOptions& options)
     : options_(options), arm_(sim::Robot::kPanda, options.object, options.arm) {
   if (options_.base_frame_id.empty()) {
@@ -41,6 +51,10 @@ ControllerStandIn::ControllerStandIn(const StandInOptions& options)
       !(options_.max_lease_timeout_s >= options_.default_lease_timeout_s)) {
     throw_invalid_argument("default_lease_timeout_s", "a positive time at most the maximum",
                            std::to_string(options_.default_lease_timeout_s));
+  }
+  {
+    std::lock_guard lock(mutex_);
+    publish_locked();
   }
   if (options_.clock == ClockMode::kRealTime) {
     clock_thread_ = std::jthread([this](const std::stop_token& stop) { run_real_time(stop); });
@@ -66,9 +80,14 @@ void ControllerStandIn::run_real_time(const std::stop_token& stop) {
       ++owed;
     }
     if (owed == kMaxCatchUp) next = now + kTick;
-    if (owed == 0) continue;
-    std::lock_guard lock(mutex_);
-    arm_.advance(kControlPeriod_s * owed);
+    // One tick per lock: a target or a state read waits at most one tick (~0.1 ms).
+    for (int k = 0; k < owed; ++k) {
+      // std::mutex is not fair: let a waiting call in before taking the next tick.
+      while (callers_waiting_.load(std::memory_order_acquire) > 0) std::this_thread::yield();
+      std::lock_guard lock(mutex_);
+      arm_.advance(kControlPeriod_s);
+      publish_locked();
+    }
   }
 }
 
@@ -80,13 +99,16 @@ ControllerStandIn::Lease ControllerStandIn::acquire_lease(const std::string& cli
         "timeout", "a duration in (0, " + std::to_string(options_.max_lease_timeout_s) + "] s",
         std::to_string(timeout_s) + " s");
   }
-  std::lock_guard lock(mutex_);
-  return {leases_.acquire(client, seconds(t), LeaseBook::Clock::now()), t};
+  const CallerLock lock(*this);
+  Lease lease{leases_.acquire(client, seconds(t), LeaseBook::Clock::now()), t};
+  publish_locked();
+  return lease;
 }
 
 void ControllerStandIn::release_lease(const std::string& lease_id) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   leases_.release(lease_id);
+  publish_locked();
 }
 
 void ControllerStandIn::require_lease(const std::string& lease_id,
@@ -101,11 +123,12 @@ void ControllerStandIn::require_lease(const std::string& lease_id,
 }
 
 void ControllerStandIn::open_stream(const std::string& lease_id) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   const auto now = LeaseBook::Clock::now();
   require_lease(lease_id, now);
   leases_.renew(lease_id, now);
   last_sequence_ = 0;
+  publish_locked();
 }
 
 std::optional<std::string> ControllerStandIn::target_error(const TargetRequest& target) const {
@@ -125,7 +148,7 @@ std::optional<std::string> ControllerStandIn::target_error(const TargetRequest& 
 
 ControllerReport ControllerStandIn::take_target(const std::string& lease_id,
                                                 const TargetRequest& target) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   ControllerStatus status = ControllerStatus::kOk;
   std::vector<std::string> errors;
   if (!leases_.renew(lease_id, LeaseBook::Clock::now())) {
@@ -145,6 +168,7 @@ ControllerReport ControllerStandIn::take_target(const std::string& lease_id,
     }
   }
   if (options_.clock == ClockMode::kLockstep) arm_.advance(options_.arm.policy_period_s);
+  publish_locked();
   return report_locked(status, std::move(errors));
 }
 
@@ -162,39 +186,49 @@ ControllerReport ControllerStandIn::report_locked(ControllerStatus status,
   return report;
 }
 
+void ControllerStandIn::publish_locked() {
+  ControllerReport report = report_locked(ControllerStatus::kOk, {});
+  std::lock_guard lock(published_mutex_);
+  published_ = std::move(report);
+  published_leases_ = leases_;
+}
+
 ControllerReport ControllerStandIn::state() const {
-  std::lock_guard lock(mutex_);
-  return report_locked(ControllerStatus::kOk, {});
+  std::lock_guard lock(published_mutex_);
+  return published_;
 }
 
 std::optional<std::string> ControllerStandIn::lease_holder() const {
-  std::lock_guard lock(mutex_);
-  return leases_.holder(LeaseBook::Clock::now());
+  std::lock_guard lock(published_mutex_);
+  return published_leases_.holder(LeaseBook::Clock::now());
 }
 
 ControllerReport ControllerStandIn::stop(const std::string& reason) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   arm_.stop();
   stop_reason_ = reason.empty() ? "no reason given" : reason;
+  publish_locked();
   return report_locked(ControllerStatus::kOk, {});
 }
 
 void ControllerStandIn::resume(const std::string& lease_id) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   require_lease(lease_id, LeaseBook::Clock::now());
   arm_.resume();
   stop_reason_.clear();
+  publish_locked();
 }
 
 ControllerStandIn::SceneReset ControllerStandIn::reset_scene(const std::string& lease_id,
                                                              std::uint64_t seed) {
-  std::lock_guard lock(mutex_);
+  const CallerLock lock(*this);
   require_lease(lease_id, LeaseBook::Clock::now());
   if (arm_.state().mode == ArmMode::kStopped) {
     throw_failed_precondition("the arm is emergency-stopped (" + stop_reason_ +
                               "): resume it before resetting the scene");
   }
   const Episode episode = arm_.reset(seed);
+  publish_locked();
   return {report_locked(ControllerStatus::kOk, {}), episode.goal_base};
 }
 

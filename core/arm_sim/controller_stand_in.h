@@ -2,8 +2,9 @@
 // What pnp-robot-sim serves: a SimulatedArm behind the rules a real arm's controller
 // enforces for its network side. One lease holder drives it; targets must name the base
 // frame and carry increasing sequence numbers; an E-stop (from anyone) is honoured at
-// once and lasts until the lease holder resumes. Thread-safe: every call takes the arm's
-// lock, held only for the call.
+// once and lasts until the lease holder resumes. Thread-safe: every change takes the
+// arm's lock for the call (the control loop for one tick); state() reads the snapshot
+// published after each change, so it never waits for the loop.
 //
 // Two clocks. Real time: a thread runs the 1 kHz control loop against the steady clock,
 // as the arm would, whatever the network does. Lockstep: the physics advances one policy
@@ -11,6 +12,7 @@
 // fast as the computer allows (evaluations, tests) with the same physics.
 
 #include <Eigen/Core>
+#include <atomic>
 #include <cstdint>
 #include <mutex>
 #include <optional>
@@ -102,16 +104,34 @@ class ControllerStandIn {
  private:
   void require_lease(const std::string& lease_id, robot::LeaseBook::Clock::time_point now) const;
   ControllerReport report_locked(ControllerStatus status, std::vector<std::string> errors) const;
+  void publish_locked();  // after every change: what state() returns
+
+  // A call's hold on the arm: the control loop lets waiting calls in before its next tick.
+  class CallerLock {
+   public:
+    explicit CallerLock(const ControllerStandIn& arm);
+    ~CallerLock();
+    CallerLock(const CallerLock&) = delete;
+    CallerLock& operator=(const CallerLock&) = delete;
+
+   private:
+    const ControllerStandIn& arm_;
+  };
   std::optional<std::string> target_error(const TargetRequest& target) const;
   void run_real_time(const std::stop_token& stop);
 
   const StandInOptions options_;
   mutable std::mutex mutex_;
+  mutable std::atomic<int> callers_waiting_{0};
   SimulatedArm arm_;                 // guarded by mutex_
   robot::LeaseBook leases_;          // guarded by mutex_
   std::uint64_t last_sequence_ = 0;  // guarded by mutex_
   std::string stop_reason_;          // guarded by mutex_
-  std::jthread clock_thread_;        // real time only; last member: stops first
+  // The latest state, readable without waiting for the control loop's lock.
+  mutable std::mutex published_mutex_;
+  ControllerReport published_;         // guarded by published_mutex_
+  robot::LeaseBook published_leases_;  // guarded by published_mutex_
+  std::jthread clock_thread_;          // real time only; last member: stops first
 };
 
 }  // namespace pnp::arm_sim

@@ -1,6 +1,7 @@
 #include "serving/served_hierarchy.h"
 
 #include "common/error.h"
+#include "rl/hierarchy_controller.h"
 #include "serving/batched_expert.h"
 
 namespace pnp::serving {
@@ -8,6 +9,35 @@ namespace {
 
 constexpr std::array<const char*, sim::kNumSubtasks> kExpertRoles{"approach", "manipulate",
                                                                   "retract"};
+
+// A HierarchyController answering as a PolicyController, with the ids that answered.
+class HierarchyPolicyController final : public PolicyController {
+ public:
+  HierarchyPolicyController(std::unique_ptr<rl::HierarchyController> controller, ServedIds ids)
+      : controller_(std::move(controller)), ids_(ids) {}
+
+  void reset() override { controller_->reset(); }
+
+  Decision act(const sim::Observation& observation, const sim::Goal& episode_goal) override {
+    const rl::HierarchyController::Decision h = controller_->act(observation, episode_goal);
+    Decision d;
+    d.subtask = h.subtask;
+    d.action = h.action;
+    d.value = h.value;
+    d.probabilities = h.probabilities;
+    d.decided = h.decided;
+    d.placed = h.placed;
+    d.choreographer_checkpoint_id = ids_.choreographer;
+    d.expert_checkpoint_id = ids_.experts[static_cast<std::size_t>(h.subtask)];
+    return d;
+  }
+
+  int steps() const override { return controller_->steps(); }
+
+ private:
+  std::unique_ptr<rl::HierarchyController> controller_;
+  ServedIds ids_;
+};
 
 }  // namespace
 
@@ -69,49 +99,29 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
     batchers_[k] = std::make_shared<ActorBatcher>(e.actor, e.observation_normalizer,
                                                   e.goal_normalizer, e.meta.clip_obs);
   }
-  give_back(make_controller());  // fail here, not in the first request, if anything is wrong
+  warm_up();  // fail here, not in the first request, if anything is wrong
 }
 
-std::unique_ptr<rl::HierarchyController> ServedHierarchy::make_controller() const {
+std::unique_ptr<PolicyController> ServedHierarchy::make_controller() const {
   rl::HierarchyController::Experts experts;
   for (std::size_t k = 0; k < experts.size(); ++k) {
     experts[k] = std::make_unique<BatchedExpert>(batchers_[k], experts_[k].meta.learn_gripper);
   }
-  return std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
-                                                   2 * sim::object_spec(object_).half_width_m);
+  return std::make_unique<HierarchyPolicyController>(
+      std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
+                                                2 * sim::object_spec(object_).half_width_m),
+      ids_);
 }
 
-std::array<BatchStats, sim::kNumSubtasks> ServedHierarchy::batch_stats() const {
-  std::array<BatchStats, sim::kNumSubtasks> stats;
-  for (std::size_t k = 0; k < stats.size(); ++k) stats[k] = batchers_[k]->stats();
+std::vector<std::int64_t> ServedHierarchy::checkpoint_ids() const {
+  return {ids_.experts[0], ids_.experts[1], ids_.experts[2], ids_.choreographer};
+}
+
+std::vector<BatchStats> ServedHierarchy::batch_stats() const {
+  std::vector<BatchStats> stats;
+  stats.reserve(batchers_.size());
+  for (const auto& b : batchers_) stats.push_back(b->stats());
   return stats;
-}
-
-void ServedHierarchy::give_back(std::unique_ptr<rl::HierarchyController> controller) const {
-  std::lock_guard lock(pool_mutex_);
-  pool_.push_back(std::move(controller));
-}
-
-ServedHierarchy::Lease ServedHierarchy::acquire() const {
-  std::unique_ptr<rl::HierarchyController> controller;
-  {
-    std::lock_guard lock(pool_mutex_);
-    if (!pool_.empty()) {
-      controller = std::move(pool_.back());
-      pool_.pop_back();
-    }
-  }
-  if (!controller) controller = make_controller();
-  controller->reset();
-  return Lease(shared_from_this(), std::move(controller));
-}
-
-ServedHierarchy::Lease::Lease(std::shared_ptr<const ServedHierarchy> owner,
-                              std::unique_ptr<rl::HierarchyController> controller)
-    : owner_(std::move(owner)), controller_(std::move(controller)) {}
-
-ServedHierarchy::Lease::~Lease() {
-  if (owner_ && controller_) owner_->give_back(std::move(controller_));
 }
 
 }  // namespace pnp::serving

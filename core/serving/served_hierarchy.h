@@ -1,24 +1,19 @@
 #pragma once
 // The hierarchy an inference server answers with: the promoted choreographer and the
-// three promoted experts, loaded (and verified) from the store, immutable once built.
-// Each request or episode borrows a HierarchyController from a pool, so concurrent
-// requests never share recurrent state or scratch space, and nothing is allocated per
-// request once the pool has warmed up. A server swaps in a new ServedHierarchy when a
-// checkpoint is promoted; leases taken on the old one keep it alive until returned.
-// The controllers share one ActorBatcher per expert: concurrent requests that run the
-// same subtask are answered by one batched forward pass.
+// three promoted experts (a ServedPolicy, see served_policy.h). Each lease wraps an
+// rl::HierarchyController. The controllers share one ActorBatcher per expert: concurrent
+// requests that run the same subtask are answered by one batched forward pass.
 
 #include <array>
 #include <cstdint>
 #include <memory>
-#include <mutex>
-#include <string>
+#include <optional>
 #include <vector>
 
 #include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
-#include "rl/hierarchy_controller.h"
 #include "serving/actor_batcher.h"
+#include "serving/served_policy.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "store/run_store.h"
@@ -32,7 +27,7 @@ struct ServedIds {
   bool operator==(const ServedIds&) const = default;
 };
 
-class ServedHierarchy : public std::enable_shared_from_this<ServedHierarchy> {
+class ServedHierarchy final : public ServedPolicy {
  public:
   // Loads the promoted checkpoints. FAILED_PRECONDITION naming the roles not promoted
   // yet; DATA_LOSS for a corrupted checkpoint; INVALID_ARGUMENT if the checkpoints were
@@ -46,42 +41,25 @@ class ServedHierarchy : public std::enable_shared_from_this<ServedHierarchy> {
   ServedHierarchy(rl::LoadedChoreographer choreographer,
                   std::array<rl::LoadedExpert, sim::kNumSubtasks> experts, ServedIds ids);
 
-  class Lease {
-   public:
-    Lease(std::shared_ptr<const ServedHierarchy> owner,
-          std::unique_ptr<rl::HierarchyController> controller);
-    Lease(Lease&&) noexcept = default;
-    Lease& operator=(Lease&&) noexcept = default;
-    ~Lease();
-    rl::HierarchyController& operator*() const { return *controller_; }
-    rl::HierarchyController* operator->() const { return controller_.get(); }
-
-   private:
-    std::shared_ptr<const ServedHierarchy> owner_;
-    std::unique_ptr<rl::HierarchyController> controller_;
-  };
-
-  // A controller reset to the start of an episode. Thread-safe.
-  Lease acquire() const;
-
   const ServedIds& ids() const { return ids_; }
-  sim::Robot robot() const { return robot_; }
-  sim::ObjectShape object() const { return object_; }
-  // Per expert (approach, manipulate, retract): requests and batches served so far.
-  std::array<BatchStats, sim::kNumSubtasks> batch_stats() const;
+  PolicyKind kind() const override { return PolicyKind::kHierarchy; }
+  // approach, manipulate, retract, hlc
+  std::vector<std::int64_t> checkpoint_ids() const override;
+  sim::Robot robot() const override { return robot_; }
+  sim::ObjectShape object() const override { return object_; }
+  // Per expert (approach, manipulate, retract).
+  std::vector<BatchStats> batch_stats() const override;
+
+ protected:
+  std::unique_ptr<PolicyController> make_controller() const override;
 
  private:
-  std::unique_ptr<rl::HierarchyController> make_controller() const;
-  void give_back(std::unique_ptr<rl::HierarchyController> controller) const;
-
   rl::LoadedChoreographer choreographer_;
   std::array<rl::LoadedExpert, sim::kNumSubtasks> experts_;
   std::array<std::shared_ptr<ActorBatcher>, sim::kNumSubtasks> batchers_;
   ServedIds ids_;
   sim::Robot robot_;
   sim::ObjectShape object_;
-  mutable std::mutex pool_mutex_;
-  mutable std::vector<std::unique_ptr<rl::HierarchyController>> pool_;
 };
 
 }  // namespace pnp::serving

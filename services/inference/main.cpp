@@ -1,10 +1,13 @@
-// pnp-inference-server: serves the promoted hierarchy from the store (PolicyService).
+// pnp-inference-server: serves the promoted policy from the store (PolicyService): the
+// hierarchy (choreographer + experts) or, with --policy e2e, the end-to-end baseline.
 //   --address 127.0.0.1:50060  --db ./pnp.db (or $PNP_DB)  --reload-ms 500
-//   [--metrics-address 127.0.0.1:9101]
+//   --policy hierarchy|e2e  [--metrics-address 127.0.0.1:9101]
 
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdlib>
+#include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "services/common/metrics_registry.h"
@@ -14,10 +17,11 @@
 int main(int argc, char** argv) {
   using namespace pnp::services;
   catch_termination_signals();
-  CLI::App app{"Serve the promoted pick-and-place hierarchy", "pnp-inference-server"};
+  CLI::App app{"Serve the promoted pick-and-place policy", "pnp-inference-server"};
   std::string address = "127.0.0.1:50060";
   std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
   int reload_ms = 500;
+  std::string policy = "hierarchy";
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();
   std::string metrics_address;
@@ -27,10 +31,16 @@ int main(int argc, char** argv) {
   app.add_option("--reload-ms", reload_ms, "how often to look for newly promoted checkpoints")
       ->check(CLI::Range(10, 60'000))
       ->capture_default_str();
+  app.add_option("--policy", policy,
+                 "what to serve: the promoted hierarchy, or the promoted end-to-end (e2e) "
+                 "DDPG+HER baseline")
+      ->check(CLI::IsMember({"hierarchy", "e2e"}))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     MetricsRegistry metrics;
-    PolicyServiceImpl service(db);
+    const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
+    PolicyServiceImpl service(db, kind);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
                            .services = {&service},
@@ -38,21 +48,21 @@ int main(int argc, char** argv) {
                            // Interceptors cost every call: only when someone can scrape.
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address});
-    std::array<Gauge*, 3> batched_requests{}, batches{};
-    for (std::size_t k = 0; k < 3; ++k) {
-      const Labels expert{
-          {"expert", std::string(pnp::sim::subtask_name(pnp::sim::kAllSubtasks[k]))}};
-      batched_requests[k] =
-          &metrics.gauge("pnp_inference_expert_requests",
-                         "expert forward passes requested (served hierarchy)", expert);
-      batches[k] = &metrics.gauge("pnp_inference_expert_batches",
-                                  "batched expert forward passes run (served hierarchy)", expert);
+    // One pair per batched actor: the three experts, or the e2e actor.
+    std::vector<Gauge*> batched_requests, batches;
+    for (const std::string& actor : pnp::serving::batched_actors(kind)) {
+      const Labels expert{{"expert", actor}};
+      batched_requests.push_back(&metrics.gauge("pnp_inference_expert_requests",
+                                                "actor forward passes requested (served policy)",
+                                                expert));
+      batches.push_back(&metrics.gauge("pnp_inference_expert_batches",
+                                       "batched actor forward passes run (served policy)", expert));
     }
     return serve_until_terminated(
         runtime, "inference",
         [&] {
           const auto stats = service.batch_stats();
-          for (std::size_t k = 0; k < 3; ++k) {
+          for (std::size_t k = 0; k < stats.size() && k < batches.size(); ++k) {
             batched_requests[k]->set(static_cast<double>(stats[k].requests));
             batches[k]->set(static_cast<double>(stats[k].batches));
           }
@@ -63,7 +73,8 @@ int main(int argc, char** argv) {
               log_event("inference", "reload_failed", {{"error", e.what()}});
           }
         },
-        std::chrono::milliseconds(reload_ms), {{"db", db}, {"ready", service.ready()}});
+        std::chrono::milliseconds(reload_ms),
+        {{"db", db}, {"policy", policy}, {"ready", service.ready()}});
   } catch (const pnp::Error& e) {
     log_event("inference", "fatal", {{"error", e.what()}});
     return 1;

@@ -6,20 +6,27 @@
 namespace pnp::services {
 namespace {
 
-void fill(const rl::HierarchyController::Decision& d, const serving::ServedHierarchy& served,
-          policy::v1::PredictResponse& out) {
-  out.set_subtask(to_proto(d.subtask));
+void fill(const serving::Decision& d, policy::v1::PredictResponse& out) {
+  out.set_subtask(d.subtask ? to_proto(*d.subtask) : common::v1::SUBTASK_UNSPECIFIED);
   to_proto(d.action, *out.mutable_action());
   out.set_value(d.value);
   out.clear_subtask_probabilities();
-  for (double p : d.probabilities) out.add_subtask_probabilities(p);
-  out.set_choreographer_checkpoint_id(served.ids().choreographer);
-  out.set_expert_checkpoint_id(served.ids().experts[static_cast<std::size_t>(d.subtask)]);
+  if (d.probabilities)
+    for (double p : *d.probabilities) out.add_subtask_probabilities(p);
+  out.set_choreographer_checkpoint_id(d.choreographer_checkpoint_id);
+  out.set_expert_checkpoint_id(d.expert_checkpoint_id);
+}
+
+bool serves_role(serving::PolicyKind kind, const std::string& role) {
+  for (const std::string& r : serving::served_roles(kind))
+    if (r == role) return true;
+  return false;
 }
 
 }  // namespace
 
-PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path) : store_(db_path) {
+PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::PolicyKind kind)
+    : kind_(kind), store_(db_path) {
   try {
     reload();
   } catch (const Error&) {  // nothing promoted yet: serve once something is
@@ -28,27 +35,30 @@ PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path) : store_(db_pat
 
 bool PolicyServiceImpl::reload() {
   std::lock_guard lock(store_mutex_);
-  const auto ids = serving::ServedHierarchy::promoted_ids(store_);
+  const auto ids = serving::promoted_checkpoint_ids(store_, kind_);
   const auto current = served_.load();
-  if (ids && current && current->ids() == *ids) return false;
-  auto next = serving::ServedHierarchy::load_promoted(store_);
+  if (ids && current && current->checkpoint_ids() == *ids) return false;
+  auto next = serving::load_promoted(store_, kind_);
   served_.store(std::move(next));
   return true;
 }
 
-std::array<serving::BatchStats, sim::kNumSubtasks> PolicyServiceImpl::batch_stats() const {
+std::vector<serving::BatchStats> PolicyServiceImpl::batch_stats() const {
   const auto served = served_.load();
-  return served ? served->batch_stats() : std::array<serving::BatchStats, sim::kNumSubtasks>{};
+  return served ? served->batch_stats()
+                : std::vector<serving::BatchStats>(serving::batched_actors(kind_).size());
 }
 
-std::shared_ptr<const serving::ServedHierarchy> PolicyServiceImpl::served_or_unavailable() const {
+std::shared_ptr<const serving::ServedPolicy> PolicyServiceImpl::served_or_unavailable() const {
   auto served = served_.load();
-  if (!served) {
+  if (served) return served;
+  if (kind_ == serving::PolicyKind::kEndToEnd) {
     throw Error(ErrorCode::kFailedPrecondition,
-                "no hierarchy is served yet: promote an approach, manipulate, retract and hlc "
-                "checkpoint");
+                "no end-to-end policy is served yet: promote an e2e checkpoint");
   }
-  return served;
+  throw Error(ErrorCode::kFailedPrecondition,
+              "no hierarchy is served yet: promote an approach, manipulate, retract and hlc "
+              "checkpoint");
 }
 
 grpc::Status PolicyServiceImpl::Predict(grpc::ServerContext*,
@@ -59,7 +69,7 @@ grpc::Status PolicyServiceImpl::Predict(grpc::ServerContext*,
     const sim::Goal goal = from_proto(request->goal(), "goal");
     const auto served = served_or_unavailable();
     auto controller = served->acquire();
-    fill(controller->act(observation, goal), *served, *response);
+    fill(controller->act(observation, goal), *response);
     return grpc::Status::OK;
   });
 }
@@ -69,7 +79,7 @@ grpc::Status PolicyServiceImpl::PredictSession(
     grpc::ServerReaderWriter<policy::v1::PredictSessionResponse, policy::v1::PredictSessionRequest>*
         stream) {
   return guarded([&] {
-    // The whole episode runs on the hierarchy served when it began.
+    // The whole episode runs on the policy served when it began.
     const auto served = served_or_unavailable();
     auto controller = served->acquire();
     policy::v1::PredictSessionRequest request;
@@ -78,7 +88,7 @@ grpc::Status PolicyServiceImpl::PredictSession(
       const sim::Observation observation = from_proto(request.observation(), "observation");
       const sim::Goal goal = from_proto(request.goal(), "goal");
       const auto d = controller->act(observation, goal);
-      fill(d, *served, *response.mutable_prediction());
+      fill(d, *response.mutable_prediction());
       response.set_decided(d.decided);
       response.set_placed(d.placed);
       response.set_step(controller->steps());
@@ -104,7 +114,8 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
     }
     response->set_role(role_from_name(promotion.role));
     response->set_checkpoint_id(promotion.checkpoint_id);
-    // Serve it now if the hierarchy is complete; an incomplete one keeps the old.
+    // Serve it now if it completes (or changes) the served kind's roles; a role the kind
+    // does not use changes nothing, an incomplete hierarchy keeps the old one.
     try {
       reload();
     } catch (const Error& e) {
@@ -119,7 +130,9 @@ grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
                                                  policy::v1::GetServingStatusResponse* response) {
   return guarded([&] {
     std::lock_guard lock(store_mutex_);
+    // The roles of the served kind only: the others serve nothing here.
     for (const store::Promotion& p : store_.promotions()) {
+      if (!serves_role(kind_, p.role)) continue;
       auto* role = response->add_roles();
       role->set_role(role_from_name(p.role));
       role->set_checkpoint_id(p.checkpoint_id);

@@ -1,32 +1,39 @@
 #pragma once
 // pnp.policy.v1.PolicyService over the store's promoted checkpoints: Predict and
-// PredictSession answer with a HierarchyController borrowed from the served hierarchy;
-// a promotion (through this service or any other writer of the store) is picked up by a
-// reload that swaps the served hierarchy atomically: requests in flight and open sessions
-// finish on the one they started with, new ones get the new one, none is dropped.
+// PredictSession answer with a controller borrowed from the served policy, either the
+// hierarchy (choreographer + experts) or the end-to-end baseline (the promoted e2e
+// actor; its answers name no subtask: SUBTASK_UNSPECIFIED, no probabilities, the e2e
+// checkpoint as expert, choreographer 0). A promotion (through this service or any other
+// writer of the store) of a role the served policy uses is picked up by a reload that
+// swaps it atomically: requests in flight and open sessions finish on the one they
+// started with, new ones get the new one, none is dropped.
 
-#include <array>
 #include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
-#include "serving/served_hierarchy.h"
+#include "serving/served_policy.h"
 #include "store/run_store.h"
 
 namespace pnp::services {
 
 class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
  public:
-  explicit PolicyServiceImpl(const std::string& db_path);
+  explicit PolicyServiceImpl(const std::string& db_path,
+                             serving::PolicyKind kind = serving::PolicyKind::kHierarchy);
 
-  // Loads the promoted checkpoints if they differ from the served ones; returns whether
-  // the hierarchy changed. A failure keeps the current one and is rethrown.
+  // Loads the promoted checkpoints of the served kind if they differ from the served
+  // ones; returns whether the policy changed. A failure keeps the current one and is
+  // rethrown.
   bool reload();
   bool ready() const { return served_.load() != nullptr; }
-  // The served hierarchy's batching counters per expert (zeros when nothing is served).
-  std::array<serving::BatchStats, sim::kNumSubtasks> batch_stats() const;
+  serving::PolicyKind kind() const { return kind_; }
+  // The served policy's batching counters per batched actor, in
+  // serving::batched_actors(kind()) order (zeros when nothing is served).
+  std::vector<serving::BatchStats> batch_stats() const;
 
   grpc::Status Predict(grpc::ServerContext* context, const policy::v1::PredictRequest* request,
                        policy::v1::PredictResponse* response) override;
@@ -44,11 +51,12 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
                     policy::v1::PingResponse* response) override;
 
  private:
-  std::shared_ptr<const serving::ServedHierarchy> served_or_unavailable() const;
+  std::shared_ptr<const serving::ServedPolicy> served_or_unavailable() const;
 
+  const serving::PolicyKind kind_;
   std::mutex store_mutex_;  // the connection is used by one thread at a time
   store::RunStore store_;
-  std::atomic<std::shared_ptr<const serving::ServedHierarchy>> served_;
+  std::atomic<std::shared_ptr<const serving::ServedPolicy>> served_;
 };
 
 }  // namespace pnp::services

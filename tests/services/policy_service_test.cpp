@@ -12,8 +12,11 @@
 #include "rl/choreographer_checkpoint.h"
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
+#include "services/common/convert.h"
 #include "services/common/server_runtime.h"
+#include "serving/served_end_to_end.h"
 #include "sim/pick_place_env.h"
+#include "sim/scripted_expert.h"
 
 namespace pnp::services {
 namespace {
@@ -29,6 +32,47 @@ std::vector<std::uint8_t> expert_blob(const std::string& role, std::uint64_t see
                             5,    0.01,       0,       0,       seed,          "test"};
   return rl::save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
                          agent.goal_normalizer());
+}
+
+// An end-to-end DDPG+HER checkpoint with random weights and normalisers fitted to a few
+// real episode states (so that normalisation matters to the action).
+std::vector<std::uint8_t> e2e_blob(std::uint64_t seed, bool learn_gripper = true) {
+  rl::DdpgHerConfig config;
+  config.hidden = {16};
+  Rng rng(seed);
+  rl::DdpgHerAgent agent(config, rng);
+  sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+  std::vector<sim::Observation> observations;
+  std::vector<sim::Goal> goals;
+  for (std::uint64_t episode = 0; episode < 4; ++episode) {
+    env.reset(seed * 100 + episode);
+    observations.push_back(env.observation());
+    goals.push_back(env.episode_goal());
+  }
+  agent.update_normalizers(observations, goals);
+  rl::ExpertMeta meta;
+  meta.role = "e2e";
+  meta.algorithm = "ddpg_her";
+  meta.robot = "fetch";
+  meta.object = "block";
+  meta.hidden = config.hidden;
+  meta.learn_gripper = learn_gripper;
+  meta.seed = seed;
+  meta.code_commit = "test";
+  return rl::save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
+                         agent.goal_normalizer());
+}
+
+// The action the e2e checkpoint's actor computes directly, unbatched and unserved.
+sim::Action direct_e2e_action(const std::vector<std::uint8_t>& blob,
+                              const sim::Observation& observation, const sim::Goal& goal) {
+  const rl::LoadedExpert e = rl::load_expert(blob);
+  rl::ActorSnapshot actor(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs);
+  return actor.act(observation, goal);
+}
+
+sim::Action action_of(const pv1::PredictResponse& r) {
+  return sim::Action(r.action().dx(), r.action().dy(), r.action().dz(), r.action().gripper());
 }
 
 std::vector<std::uint8_t> choreographer_blob(std::uint64_t seed) {
@@ -69,8 +113,8 @@ class PolicyServiceTest : public ::testing::Test {
         store_->promote(store_checkpoint("hlc", choreographer_blob(seed))).checkpoint_id);
   }
 
-  void start() {
-    service_ = std::make_unique<PolicyServiceImpl>(db_);
+  void start(serving::PolicyKind kind = serving::PolicyKind::kHierarchy) {
+    service_ = std::make_unique<PolicyServiceImpl>(db_, kind);
     runtime_ = std::make_unique<ServerRuntime>(
         ServerConfig{"127.0.0.1:0", 1 << 20, {service_.get()}, {"pnp.policy.v1.PolicyService"}});
     stub_ = pv1::PolicyService::NewStub(grpc::CreateChannel(
@@ -86,6 +130,11 @@ class PolicyServiceTest : public ::testing::Test {
     r.mutable_goal()->set_z_m(env.episode_goal().z());
     return r;
   }
+
+  static sim::Observation observation_of(const pv1::PredictRequest& r) {
+    return from_proto(r.observation(), "observation");
+  }
+  static sim::Goal goal_of(const pv1::PredictRequest& r) { return from_proto(r.goal(), "goal"); }
 
   pv1::PredictRequest valid_request() {
     sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
@@ -241,6 +290,231 @@ TEST_F(PolicyServiceTest, ACorruptedPromotedCheckpointIsNeverServed) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION)
       << "nothing is served rather than a corrupted expert";
   EXPECT_THROW(service_->reload(), pnp::Error);
+}
+
+// ---- --policy e2e: the end-to-end DDPG+HER baseline ----
+
+TEST_F(PolicyServiceTest, E2ePredictAnswersWithTheE2eActorOnTheEpisodeGoal) {
+  promote_all(1);  // a promoted hierarchy is not what e2e serves
+  const auto blob = e2e_blob(5);
+  const auto e2e = store_->promote(store_checkpoint("e2e", blob)).checkpoint_id;
+  start(serving::PolicyKind::kEndToEnd);
+  EXPECT_TRUE(service_->ready());
+  EXPECT_EQ(service_->kind(), serving::PolicyKind::kEndToEnd);
+  for (const std::uint64_t seed : {3u, 4u, 5u}) {
+    sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+    env.reset(seed);
+    const auto request = request_from(env);
+    grpc::ClientContext context;
+    pv1::PredictResponse response;
+    const auto status = stub_->Predict(&context, request, &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    const sim::Action expected = direct_e2e_action(blob, env.observation(), env.episode_goal());
+    EXPECT_LE((action_of(response) - expected).cwiseAbs().maxCoeff(), 1e-6)
+        << "served " << action_of(response).transpose() << " direct " << expected.transpose();
+    EXPECT_EQ(response.subtask(), common::v1::SUBTASK_UNSPECIFIED);
+    EXPECT_EQ(response.subtask_probabilities_size(), 0);
+    EXPECT_EQ(response.value(), 0.0);
+    EXPECT_EQ(response.expert_checkpoint_id(), e2e);
+    EXPECT_EQ(response.choreographer_checkpoint_id(), 0);
+  }
+  const auto stats = service_->batch_stats();
+  ASSERT_EQ(stats.size(), 1u) << "one batched actor: e2e";
+  EXPECT_EQ(stats[0].requests, 3u);
+}
+
+TEST_F(PolicyServiceTest, E2eSessionAnswersEveryStepWithTheE2eActor) {
+  const auto blob = e2e_blob(6);
+  const auto e2e = store_->promote(store_checkpoint("e2e", blob)).checkpoint_id;
+  start(serving::PolicyKind::kEndToEnd);
+  sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+  env.reset(21);
+  grpc::ClientContext session_context;
+  auto session = stub_->PredictSession(&session_context);
+  pv1::PredictSessionRequest step;
+  pv1::PredictSessionResponse answer;
+  for (int t = 1; t <= 8; ++t) {
+    const auto r = request_from(env);
+    *step.mutable_observation() = r.observation();
+    *step.mutable_goal() = r.goal();
+    ASSERT_TRUE(session->Write(step));
+    ASSERT_TRUE(session->Read(&answer));
+    const sim::Action served = action_of(answer.prediction());
+    const sim::Action expected = direct_e2e_action(blob, env.observation(), env.episode_goal());
+    EXPECT_LE((served - expected).cwiseAbs().maxCoeff(), 1e-6) << "step " << t;
+    EXPECT_EQ(answer.prediction().subtask(), common::v1::SUBTASK_UNSPECIFIED);
+    EXPECT_EQ(answer.prediction().subtask_probabilities_size(), 0);
+    EXPECT_EQ(answer.prediction().expert_checkpoint_id(), e2e);
+    EXPECT_EQ(answer.prediction().choreographer_checkpoint_id(), 0);
+    EXPECT_FALSE(answer.decided()) << "no choreographer decides";
+    EXPECT_FALSE(answer.placed()) << "the e2e actor acts at every step";
+    EXPECT_EQ(answer.step(), t);
+    env.step(served, env.episode_goal(), sim::Objective::kTask);
+  }
+  session->WritesDone();
+  EXPECT_TRUE(session->Finish().ok());
+}
+
+TEST_F(PolicyServiceTest, E2eWithoutALearnedGripperClosesItAsScriptedRetract) {
+  const auto blob = e2e_blob(7, /*learn_gripper=*/false);
+  store_->promote(store_checkpoint("e2e", blob));
+  start(serving::PolicyKind::kEndToEnd);
+  const auto request = valid_request();
+  grpc::ClientContext context;
+  pv1::PredictResponse response;
+  ASSERT_TRUE(stub_->Predict(&context, request, &response).ok());
+  const sim::Observation o = observation_of(request);
+  const sim::Goal g = goal_of(request);
+  const sim::Action arm = direct_e2e_action(blob, o, g);
+  const double width =
+      2 * sim::object_spec(sim::ObjectShape::kBlock).half_width_m;  // the served object's
+  const double gripper =
+      sim::scripted_action(sim::Subtask::kRetract, sim::TaskState::from(o, g, width))(3);
+  EXPECT_LE((action_of(response).head<3>() - arm.head<3>()).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_EQ(response.action().gripper(), gripper);
+}
+
+TEST_F(PolicyServiceTest, E2eWithNothingPromotedIsAFailedPreconditionNamingE2e) {
+  promote_all(1);  // the hierarchy does not stand in for e2e
+  start(serving::PolicyKind::kEndToEnd);
+  EXPECT_FALSE(service_->ready());
+  ASSERT_EQ(service_->batch_stats().size(), 1u);
+  EXPECT_EQ(service_->batch_stats()[0].requests, 0u);
+  grpc::ClientContext context;
+  pv1::PredictResponse response;
+  auto status = stub_->Predict(&context, valid_request(), &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("e2e"), std::string::npos) << status.error_message();
+  {
+    grpc::ClientContext session_context;
+    auto session = stub_->PredictSession(&session_context);
+    pv1::PredictSessionRequest step;
+    const auto r = valid_request();
+    *step.mutable_observation() = r.observation();
+    *step.mutable_goal() = r.goal();
+    session->Write(step);
+    session->WritesDone();
+    pv1::PredictSessionResponse answer;
+    EXPECT_FALSE(session->Read(&answer));
+    status = session->Finish();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+    EXPECT_NE(status.error_message().find("e2e"), std::string::npos) << status.error_message();
+  }
+  EXPECT_THROW(service_->reload(), pnp::Error);
+  try {
+    service_->reload();
+  } catch (const pnp::Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("e2e"), std::string::npos) << e.what();
+  }
+  grpc::ClientContext status_context;
+  pv1::GetServingStatusResponse serving;
+  ASSERT_TRUE(stub_->GetServingStatus(&status_context, {}, &serving).ok());
+  EXPECT_FALSE(serving.ready());
+  EXPECT_EQ(serving.roles_size(), 0) << "the hierarchy's roles serve nothing in e2e mode";
+}
+
+TEST_F(PolicyServiceTest, E2ePromotionThroughTheServiceServesAndReloads) {
+  start(serving::PolicyKind::kEndToEnd);
+  auto promote = [&](std::int64_t id) {
+    grpc::ClientContext c;
+    pv1::PromoteCheckpointRequest r;
+    pv1::PromoteCheckpointResponse out;
+    r.set_checkpoint_id(id);
+    const auto status = stub_->PromoteCheckpoint(&c, r, &out);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return out;
+  };
+  const auto first_blob = e2e_blob(8);
+  const auto first = store_checkpoint("e2e", first_blob);
+  const auto promoted = promote(first);
+  EXPECT_EQ(promoted.role(), common::v1::ROLE_E2E);
+  EXPECT_EQ(promoted.checkpoint_id(), first);
+  EXPECT_TRUE(service_->ready());
+
+  // Hierarchy roles promoted meanwhile change nothing here.
+  promote(store_checkpoint("approach", expert_blob("approach", 3)));
+  EXPECT_FALSE(service_->reload());
+
+  grpc::ClientContext status_context;
+  pv1::GetServingStatusResponse serving;
+  ASSERT_TRUE(stub_->GetServingStatus(&status_context, {}, &serving).ok());
+  EXPECT_TRUE(serving.ready());
+  ASSERT_EQ(serving.roles_size(), 1);
+  EXPECT_EQ(serving.roles(0).role(), common::v1::ROLE_E2E);
+  EXPECT_EQ(serving.roles(0).checkpoint_id(), first);
+  EXPECT_EQ(serving.roles(0).robot(), common::v1::ROBOT_FETCH);
+  EXPECT_EQ(serving.roles(0).object(), common::v1::OBJECT_SHAPE_BLOCK);
+
+  // A session open on the first keeps it; a new e2e promotion serves new requests.
+  grpc::ClientContext session_context;
+  auto session = stub_->PredictSession(&session_context);
+  pv1::PredictSessionRequest step;
+  pv1::PredictSessionResponse answer;
+  const auto r = valid_request();
+  *step.mutable_observation() = r.observation();
+  *step.mutable_goal() = r.goal();
+  ASSERT_TRUE(session->Write(step));
+  ASSERT_TRUE(session->Read(&answer));
+  EXPECT_EQ(answer.prediction().expert_checkpoint_id(), first);
+
+  const auto second_blob = e2e_blob(9);
+  const auto second = store_checkpoint("e2e", second_blob);
+  promote(second);
+  ASSERT_TRUE(session->Write(step));
+  ASSERT_TRUE(session->Read(&answer));
+  EXPECT_EQ(answer.prediction().expert_checkpoint_id(), first);
+  EXPECT_LE((action_of(answer.prediction()) -
+             direct_e2e_action(first_blob, observation_of(r), goal_of(r)))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-6);
+  session->WritesDone();
+  EXPECT_TRUE(session->Finish().ok());
+
+  grpc::ClientContext context;
+  pv1::PredictResponse response;
+  ASSERT_TRUE(stub_->Predict(&context, r, &response).ok());
+  EXPECT_EQ(response.expert_checkpoint_id(), second);
+  EXPECT_LE((action_of(response) - direct_e2e_action(second_blob, observation_of(r), goal_of(r)))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-6);
+}
+
+TEST_F(PolicyServiceTest, HierarchyModeIgnoresAPromotedE2eCheckpoint) {
+  promote_all(1);
+  const auto e2e = store_->promote(store_checkpoint("e2e", e2e_blob(5))).checkpoint_id;
+  start();
+  EXPECT_EQ(service_->kind(), serving::PolicyKind::kHierarchy);
+  grpc::ClientContext context;
+  pv1::PredictResponse response;
+  ASSERT_TRUE(stub_->Predict(&context, valid_request(), &response).ok());
+  EXPECT_NE(response.subtask(), common::v1::SUBTASK_UNSPECIFIED);
+  EXPECT_NE(response.expert_checkpoint_id(), e2e);
+  EXPECT_EQ(response.choreographer_checkpoint_id(), ids_[3]);
+  EXPECT_EQ(service_->batch_stats().size(), 3u);
+  grpc::ClientContext status_context;
+  pv1::GetServingStatusResponse serving;
+  ASSERT_TRUE(stub_->GetServingStatus(&status_context, {}, &serving).ok());
+  EXPECT_TRUE(serving.ready());
+  EXPECT_EQ(serving.roles_size(), 4);
+  for (const auto& role : serving.roles()) EXPECT_NE(role.role(), common::v1::ROLE_E2E);
+}
+
+TEST(ServedEndToEnd, RefusesACheckpointOfAnotherRoleNamingIt) {
+  rl::LoadedExpert approach = rl::load_expert(expert_blob("approach", 1));
+  try {
+    serving::ServedEndToEnd served(std::move(approach), 42);
+    FAIL() << "an approach checkpoint was served as e2e";
+  } catch (const pnp::Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("e2e checkpoint 42"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("role approach"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(serving::parse_policy_kind("e2e"), serving::PolicyKind::kEndToEnd);
+  EXPECT_EQ(serving::parse_policy_kind("hierarchy"), serving::PolicyKind::kHierarchy);
+  EXPECT_THROW(serving::parse_policy_kind("hlc"), pnp::Error);
 }
 
 }  // namespace
