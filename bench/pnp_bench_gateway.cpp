@@ -48,6 +48,52 @@ double ping_p50_us(int port, int calls) {
   return us[us.size() / 2];
 }
 
+// GetState back to back: the state read's own cost, without the cycle's idle wait.
+double get_state_p50_us(gateway::ControllerLink& controller, int calls) {
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(calls));
+  for (int k = 0; k < calls; ++k) {
+    const auto start = Clock::now();
+    controller.state();
+    us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+  }
+  std::sort(us.begin(), us.end());
+  return us[us.size() / 2];
+}
+
+// Episodes from `first_seed` on a fresh stand-in with `clock`, while `more` says so.
+template <typename More>
+std::vector<gateway::EpisodeReport> drive(const robot::GatewayConfig& config,
+                                          policy::v1::PolicyService::Stub& policy,
+                                          arm_sim::ClockMode clock, std::uint64_t first_seed,
+                                          More more, double* state_hot_us = nullptr) {
+  arm_sim::StandInOptions options;
+  options.clock = clock;
+  arm_sim::ControllerStandIn arm(options);
+  services::RobotControllerServiceImpl controller_service(arm);
+  services::SimulatedSceneServiceImpl scene_service(arm);
+  services::ServerRuntime server(
+      {"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
+  std::vector<gateway::EpisodeReport> reports;
+  {
+    gateway::ControllerLink controller(
+        grpc::CreateChannel(loopback(server.port()), grpc::InsecureChannelCredentials()),
+        loopback(server.port()), std::chrono::milliseconds(2000));
+    controller.acquire_lease("pnp-bench-gateway", std::chrono::milliseconds(1000));
+    if (state_hot_us) *state_hot_us = get_state_p50_us(controller, 500);
+    gateway::GatewayEpisodeRunner runner(config, controller, policy,
+                                         [](std::string_view, const nlohmann::json&) {});
+    const std::atomic<bool> never{false};
+    do {
+      gateway::EpisodeOptions episode;
+      episode.seed = first_seed + reports.size();
+      reports.push_back(runner.run(episode, never));
+    } while (more(reports));
+  }
+  server.shutdown(std::chrono::milliseconds(500));
+  return reports;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,42 +123,37 @@ int main(int argc, char** argv) {
     }
     services::PolicyServiceImpl policy_service(db);
     services::ServerRuntime policy_server({"127.0.0.1:0", 4 << 20, {&policy_service}, {}});
-    arm_sim::ControllerStandIn arm(arm_sim::StandInOptions{});  // real time, block
-    services::RobotControllerServiceImpl controller_service(arm);
-    services::SimulatedSceneServiceImpl scene_service(arm);
-    services::ServerRuntime controller_server(
-        {"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
-
-    gateway::ControllerLink controller(
-        grpc::CreateChannel(loopback(controller_server.port()), grpc::InsecureChannelCredentials()),
-        loopback(controller_server.port()), std::chrono::milliseconds(2000));
     auto policy_stub = policy::v1::PolicyService::NewStub(
         grpc::CreateChannel(loopback(policy_server.port()), grpc::InsecureChannelCredentials()));
-    controller.acquire_lease("pnp-bench-gateway", std::chrono::milliseconds(1000));
-    gateway::GatewayEpisodeRunner runner(config, controller, *policy_stub,
-                                         [](std::string_view, const nlohmann::json&) {});
     const double floor_before = ping_p50_us(policy_server.port(), 500);
-    std::vector<gateway::EpisodeReport> reports;
+
+    // Real time: the latency figures (and success with the arm on the wall clock).
+    double state_hot_us = 0;
     std::size_t done = 0;
-    const std::atomic<bool> never{false};
     const auto start = Clock::now();
-    while (done < static_cast<std::size_t>(cycles)) {
-      gateway::EpisodeOptions options;
-      options.seed = seed + reports.size();
-      reports.push_back(runner.run(options, never));
-      done += reports.back().cycle_us.size();
-    }
+    const auto reports = drive(
+        config, *policy_stub, arm_sim::ClockMode::kRealTime, seed,
+        [&](const std::vector<gateway::EpisodeReport>& so_far) {
+          done += so_far.back().cycle_us.size();
+          return done < static_cast<std::size_t>(cycles);
+        },
+        &state_hot_us);
     const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double floor_after = ping_p50_us(policy_server.port(), 500);
-    controller.release_lease();
+    // The same episodes in lockstep: the physics without the wall clock, the success peer.
+    const auto lockstep = drive(config, *policy_stub, arm_sim::ClockMode::kLockstep, seed,
+                                [&](const std::vector<gateway::EpisodeReport>& so_far) {
+                                  return so_far.size() < reports.size();
+                                });
     policy_server.shutdown(std::chrono::milliseconds(500));
-    controller_server.shutdown(std::chrono::milliseconds(500));
     std::filesystem::remove_all(dir);
 
     nlohmann::json out = gateway::summarize(reports);
     const double floor = std::min(floor_before, floor_after);
     out["floor_p50_us"] = floor;
     out["cycle_p50_over_floor"] = out["cycle_p50_us"].get<double>() / floor;
+    out["state_back_to_back_p50_us"] = state_hot_us;
+    out["lockstep_success_rate"] = gateway::summarize(lockstep)["success_rate"];
     out["wall_s"] = wall_s;
     out["period_ms"] = config.policy_period_s * 1000;
     std::cout << (json ? out.dump() : out.dump(2)) << "\n";

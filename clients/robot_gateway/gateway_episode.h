@@ -41,11 +41,11 @@ struct EpisodeReport {
   EpisodeEnd end = EpisodeEnd::kStepCap;
   std::string reason;  // for kDeadman and kControllerFault
   int steps = 0;
-  int refused = 0;               // by the gateway's safety check (held instead)
-  int rate_limited = 0;          // shortened to the speed limit
-  int controller_refused = 0;    // feedback with a status other than OK
-  int missed_periods = 0;        // cycles that overran the policy period (paced only)
-  std::vector<double> cycle_us;  // state -> inference -> transform -> send, per cycle
+  int refused = 0;                             // by the gateway's safety check (held instead)
+  int rate_limited = 0;                        // shortened to the speed limit
+  int controller_refused = 0;                  // feedback with a status other than OK
+  int missed_periods = 0;                      // cycles that overran the policy period (paced only)
+  std::vector<double> cycle_us;                // state -> inference -> transform -> send, per cycle
   std::vector<double> state_us, inference_us;  // the cycle's first two phases
 };
 

@@ -19,8 +19,8 @@
 #include "rl/choreographer_net.h"
 #include "rl/hlc_episode.h"
 #include "rl/training_progress.h"
-#include "sim/subtask_policy.h"
 #include "sim/env_factory.h"
+#include "sim/subtask_policy.h"
 
 namespace pnp::rl {
 

@@ -7,9 +7,8 @@
 
 namespace pnp::rl {
 
-EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs,
-                                   const sim::SubtaskPolicy& policy, int episodes,
-                                   std::uint64_t seed, ThreadPool& pool) {
+EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs, const sim::SubtaskPolicy& policy,
+                                   int episodes, std::uint64_t seed, ThreadPool& pool) {
   const auto count = static_cast<std::size_t>(episodes);
   const std::size_t workers = std::min(pool.size(), count);
   std::vector<char> success(count, 0);

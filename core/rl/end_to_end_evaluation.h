@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "common/thread_pool.h"
-#include "sim/subtask_policy.h"
 #include "sim/env_factory.h"
+#include "sim/subtask_policy.h"
 
 namespace pnp::rl {
 
@@ -15,8 +15,7 @@ struct EndToEndReport {
   long long env_steps = 0;
 };
 
-EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs,
-                                   const sim::SubtaskPolicy& policy, int episodes,
-                                   std::uint64_t seed, ThreadPool& pool);
+EndToEndReport evaluate_end_to_end(const sim::EnvFactory& envs, const sim::SubtaskPolicy& policy,
+                                   int episodes, std::uint64_t seed, ThreadPool& pool);
 
 }  // namespace pnp::rl

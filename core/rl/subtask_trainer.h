@@ -15,8 +15,8 @@
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/training_progress.h"
-#include "sim/subtask_policy.h"
 #include "sim/env_factory.h"
+#include "sim/subtask_policy.h"
 
 namespace pnp::rl {
 

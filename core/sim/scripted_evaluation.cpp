@@ -88,8 +88,7 @@ ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long 
   ThreadPool pool(threads);
   const ScriptedPolicy scripted;
   return evaluate_pipeline(LocalEnvFactory(WorldModel::load(robot, object)),
-                           {&scripted, &scripted, &scripted},
-                           episodes, seed, pool);
+                           {&scripted, &scripted, &scripted}, episodes, seed, pool);
 }
 
 }  // namespace pnp::sim

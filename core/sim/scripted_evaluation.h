@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "common/thread_pool.h"
+#include "sim/env_factory.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/scripted_pipeline.h"
-#include "sim/env_factory.h"
 
 namespace pnp::sim {
 

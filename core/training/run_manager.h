@@ -36,9 +36,9 @@ struct CheckpointRefs {
 
 struct RunManagerOptions {
   std::string db_path;
-  std::string role;         // the one role this manager trains
-  std::string code_commit;  // recorded with every run and checkpoint
-  std::size_t threads = 0;  // trainer threads (0: all cores); results do not depend on it
+  std::string role;                  // the one role this manager trains
+  std::string code_commit;           // recorded with every run and checkpoint
+  std::size_t threads = 0;           // trainer threads (0: all cores); results do not depend on it
   EnvironmentSource environments{};  // where rollouts run (empty: in this process)
 };
 

@@ -19,8 +19,9 @@ HlcTrainingOutput short_run(int workers) {
   config.stop.eval_episodes = 4;
   config.eval_threads = 2;
   const sim::ScriptedPolicy scripted;
-  return train_choreographer(sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
-                             {&scripted, &scripted, &scripted}, config);
+  return train_choreographer(
+      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+      {&scripted, &scripted, &scripted}, config);
 }
 
 // Workers run concurrently, but gradients are applied in ticket order: the same seed and

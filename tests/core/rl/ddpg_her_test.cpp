@@ -153,7 +153,8 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
   SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kDdpgHer, 7, 6000);
   config.ddpg.demo_episodes = 0;  // learn from exploration alone
   const auto out = train_subtask_expert(
-      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)), config);
+      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+      config);
   ASSERT_FALSE(out.result.curve.empty());
   EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
   EXPECT_GE(out.result.curve.back().subtask_success, 0.9);
@@ -164,7 +165,8 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
 TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
   const SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kBcOnline, 2, 3000);
   const auto out = train_subtask_expert(
-      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)), config);
+      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+      config);
   EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
   EXPECT_EQ(out.result.curve.front().critic_loss, 0.0) << "behaviour cloning trains no critic";
 }
@@ -183,8 +185,9 @@ TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
     config.stop.eval_interval_steps = 150;
     config.stop.eval_episodes = 6;
     config.threads = threads;
-    return train_subtask_expert(sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock)),
-                                config);
+    return train_subtask_expert(
+        sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock)),
+        config);
   };
   const auto a = run(1), b = run(3);
   ASSERT_EQ(a.result.curve.size(), b.result.curve.size());

@@ -1,9 +1,9 @@
-#include "sim/pick_place_env.h"
 #include "sim/scripted_pipeline.h"
 
 #include <gtest/gtest.h>
 
 #include "common/rng.h"
+#include "sim/pick_place_env.h"
 #include "sim/scripted_evaluation.h"
 #include "test_worlds.h"
 
