@@ -111,9 +111,17 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
     }
     if (report.steps >= config_.max_episode_steps) break;  // kStepCap
 
-    const sim::Observation observation =
-        perceived.update({measured_sim.position_m, state.gripper_width_m(), object_sim.position_m,
-                          object_sim.orientation});
+    sim::Observation observation;
+    try {
+      observation = perceived.update({measured_sim.position_m, state.gripper_width_m(),
+                                      object_sim.position_m, object_sim.orientation});
+    } catch (const Error& e) {
+      // A reading the policy cannot be given: nothing is sent (the arm holds its last
+      // target) and the episode ends with the reason; the next episode goes on.
+      end_with(EpisodeEnd::kControllerFault, std::string("bad controller reading: ") + e.what());
+      log_("bad_reading", {{"step", report.steps}, {"reason", report.reason}});
+      break;
+    }
     const auto asked = Clock::now();
     std::optional<Prediction> prediction;
     if (session.ask(observation, goal_sim)) prediction = session.answer(asked + deadman);

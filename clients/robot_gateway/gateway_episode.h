@@ -39,7 +39,7 @@ struct EpisodeReport {
   std::uint64_t seed = 0;
   bool success = false;
   EpisodeEnd end = EpisodeEnd::kStepCap;
-  std::string reason;  // for kDeadman and kControllerFault
+  std::string reason;  // for kDeadman and kControllerFault (a fault or a bad reading)
   int steps = 0;
   int refused = 0;                             // by the gateway's safety check (held instead)
   int rate_limited = 0;                        // shortened to the speed limit

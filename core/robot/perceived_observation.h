@@ -23,8 +23,8 @@ struct PerceivedState {
 
 class PerceivedObservation {
  public:
-  // INVALID_ARGUMENT for non-finite values or a finger gap below -5 mm (closed on nothing,
-  // simulated fingers read a few millimetres below zero: kept as it is).
+  // INVALID_ARGUMENT for non-finite values or a finger gap below -2 cm (closed on nothing,
+  // simulated fingers read up to ~12 mm below zero: kept as it is).
   sim::Observation update(const PerceivedState& state);
   void reset() { previous_.reset(); }  // a new episode: no velocities yet
 

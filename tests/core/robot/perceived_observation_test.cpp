@@ -74,11 +74,11 @@ TEST(PerceivedObservation, RefusesNaNAndBadValues) {
   s.finger_gap_m = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(p.update(s), Error);
   s = state_at(0);
-  s.finger_gap_m = -0.01;
+  s.finger_gap_m = -0.03;
   EXPECT_THROW(p.update(s), Error);
-  // Closed on nothing, the simulated fingers read a few millimetres past zero: kept as is.
-  s.finger_gap_m = -0.0035;
-  EXPECT_DOUBLE_EQ(sim::finger_gap(p.update(s)), -0.0035);
+  // Closed on nothing, the simulated fingers read millimetres past zero: kept as is.
+  s.finger_gap_m = -0.012;
+  EXPECT_DOUBLE_EQ(sim::finger_gap(p.update(s)), -0.012);
   p.reset();
   s = state_at(0);
   s.object_orientation = Eigen::Quaterniond(2, 0, 0, 0);
