@@ -218,6 +218,14 @@ void expect_resumes(const TempDir& dir, std::int64_t run_id, const Interrupted& 
   EXPECT_EQ(last_before.env_steps(), before.checkpoint_steps);
   EXPECT_GT(first_after.env_steps(), before.checkpoint_steps);
   EXPECT_GT(first_after.episodes(), last_before.episodes());
+  // The run's progress is published apart from the curve: it catches up with it.
+  EXPECT_TRUE(wait_until(
+      [&] {
+        run = second.get(run_id);
+        return finished(run) || run.env_steps() >= first_after.env_steps();
+      },
+      kGuard, 20ms))
+      << run.DebugString();
   EXPECT_GE(run.env_steps(), first_after.env_steps());
 
   second.cancel(run_id);
