@@ -64,6 +64,58 @@ class StalledPolicyService final : public pv1::PolicyService::Service {
   }
 };
 
+// A controller whose readings are broken (a finger gap far below zero): the gateway must
+// end that episode with the reason, send nothing, and stay up.
+class BrokenReadingController final : public rv1::RobotControllerService::Service,
+                                      public rv1::SimulatedSceneService::Service {
+ public:
+  grpc::Status AcquireLease(grpc::ServerContext*, const rv1::AcquireLeaseRequest*,
+                            rv1::AcquireLeaseResponse* response) override {
+    response->set_lease_id("lease");
+    return grpc::Status::OK;
+  }
+  grpc::Status ReleaseLease(grpc::ServerContext*, const rv1::ReleaseLeaseRequest*,
+                            rv1::ReleaseLeaseResponse*) override {
+    return grpc::Status::OK;
+  }
+  grpc::Status ResetScene(grpc::ServerContext*, const rv1::ResetSceneRequest*,
+                          rv1::ResetSceneResponse* response) override {
+    fill(*response->mutable_state());
+    response->mutable_goal()->set_x_m(0.5);
+    return grpc::Status::OK;
+  }
+  grpc::Status GetState(grpc::ServerContext*, const rv1::GetStateRequest*,
+                        rv1::GetStateResponse* response) override {
+    fill(*response->mutable_state());
+    response->set_lockstep(true);
+    return grpc::Status::OK;
+  }
+  grpc::Status StreamPoseTargets(
+      grpc::ServerContext*,
+      grpc::ServerReaderWriter<rv1::ControllerFeedback, rv1::StreamPoseTargetsRequest>* stream)
+      override {
+    rv1::StreamPoseTargetsRequest request;
+    while (stream->Read(&request)) {
+      if (request.has_target()) ++targets;
+    }
+    return grpc::Status::OK;
+  }
+  std::atomic<int> targets{0};
+
+ private:
+  static void fill(rv1::ControllerFeedback& state) {
+    state.set_frame_id("panda_link0");
+    state.mutable_measured()->mutable_position()->set_x_m(0.46);
+    state.mutable_measured()->mutable_position()->set_z_m(0.2);
+    state.mutable_measured()->mutable_orientation()->set_x(1);  // gripper down
+    *state.mutable_commanded() = state.measured();
+    state.mutable_object()->mutable_pose()->mutable_position()->set_x_m(0.3);
+    state.mutable_object()->mutable_pose()->mutable_orientation()->set_w(1);
+    state.set_gripper_width_m(-0.05);  // 5 cm below closed: not a finger gap
+    state.set_mode(rv1::CONTROLLER_MODE_IDLE);
+  }
+};
+
 class GatewayEndToEnd : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -186,6 +238,31 @@ TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
             1e-9);
   EXPECT_EQ(count("deadman"), 1);
   stalled_server.shutdown(std::chrono::milliseconds(100));
+}
+
+TEST_F(GatewayEndToEnd, ABrokenReadingEndsTheEpisodeNotTheGateway) {
+  BrokenReadingController broken;
+  services::ServerRuntime broken_server(
+      {"127.0.0.1:0",
+       1 << 20,
+       {static_cast<rv1::RobotControllerService::Service*>(&broken),
+        static_cast<rv1::SimulatedSceneService::Service*>(&broken)},
+       {}});
+  ControllerLink link(
+      grpc::CreateChannel(loopback(broken_server.port()), grpc::InsecureChannelCredentials()),
+      loopback(broken_server.port()), std::chrono::milliseconds(2000));
+  link.acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, link, *policy_stub_, recorder());
+  for (std::uint64_t seed : {1u, 2u}) {  // the second episode runs as well
+    const EpisodeReport report = runner.run(episode(seed), not_interrupted_);
+    EXPECT_EQ(report.end, EpisodeEnd::kControllerFault);
+    EXPECT_NE(report.reason.find("finger_gap_m"), std::string::npos) << report.reason;
+    EXPECT_EQ(report.steps, 0);
+  }
+  EXPECT_EQ(broken.targets.load(), 0);  // nothing was sent
+  EXPECT_EQ(count("bad_reading"), 2);
+  broken_server.shutdown(std::chrono::milliseconds(100));
 }
 
 TEST_F(GatewayEndToEnd, ASecondGatewayIsRefusedTheLease) {
