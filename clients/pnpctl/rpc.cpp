@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "common/error.h"
+#include "services/common/address.h"
 #include "services/common/status.h"
 
 namespace pnp::pnpctl {
@@ -42,6 +43,7 @@ std::string enum_short_name(const google::protobuf::EnumDescriptor* descriptor,
 }  // namespace
 
 std::shared_ptr<grpc::Channel> channel(const std::string& address) {
+  services::validate_address(address, "address");
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);

@@ -121,7 +121,9 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
   long long next_eval = config.stop.eval_interval_steps;
   while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
   double loss_sum_critic = 0, loss_sum_actor = 0;
-  long long updates = 0, updates_since_eval = 0;
+  // A resumed run counts on from its curve's last point, as its env steps do.
+  long long updates = resumed.empty() ? 0 : resumed.back().updates;
+  long long updates_since_eval = 0;
   UpdateSchedule schedule(config.ddpg);
   const sim::ScriptedPolicy scripted;
 

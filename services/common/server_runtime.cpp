@@ -14,11 +14,15 @@
 #include <thread>
 
 #include "common/error.h"
+#include "services/common/address.h"
 #include "services/common/rpc_metrics.h"
 
 namespace pnp::services {
 
 ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
+  validate_address(config.address, "--address");
+  if (!config.metrics_address.empty())
+    validate_address(config.metrics_address, "--metrics-address");
   if (config.metrics == nullptr && !config.metrics_address.empty())
     throw_invalid_argument("metrics", "a registry to serve on " + config.metrics_address, "none");
   // Before gRPC starts: a metrics port that cannot listen fails the server whole.

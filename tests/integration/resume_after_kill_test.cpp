@@ -218,6 +218,7 @@ void expect_resumes(const TempDir& dir, std::int64_t run_id, const Interrupted& 
   EXPECT_EQ(last_before.env_steps(), before.checkpoint_steps);
   EXPECT_GT(first_after.env_steps(), before.checkpoint_steps);
   EXPECT_GT(first_after.episodes(), last_before.episodes());
+  EXPECT_GT(first_after.updates(), last_before.updates());  // counts on, not from 0
   // The run's progress is published apart from the curve: it catches up with it.
   EXPECT_TRUE(wait_until(
       [&] {
