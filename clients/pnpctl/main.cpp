@@ -3,7 +3,9 @@
 // scripts/run uses). Errors are one line on stderr and a non-zero exit.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 
 #include "clients/pnpctl/commands.h"
@@ -11,6 +13,29 @@
 #include "common/error.h"
 
 namespace {
+
+// Flag checks with the project's wording ("expected ..., got ..."): CLI11's own range
+// checks print the whole double range.
+double parsed_number(const std::string& value) {
+  char* end = nullptr;
+  const double v = std::strtod(value.c_str(), &end);
+  return end != value.c_str() && *end == '\0' ? v : std::nan("");
+}
+CLI::Validator positive() {
+  return {[](std::string& value) {
+            return parsed_number(value) > 0 ? std::string()
+                                            : "expected a positive number, got " + value;
+          },
+          "POSITIVE"};
+}
+CLI::Validator success_rate() {
+  return {[](std::string& value) {
+            const double v = parsed_number(value);
+            return v > 0 && v <= 1 ? std::string()
+                                   : "expected a success rate in (0, 1], got " + value;
+          },
+          "(0,1]"};
+}
 
 using namespace pnp::pnpctl;
 
@@ -22,14 +47,19 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   cmd.add_option("--robot", a.robot)->capture_default_str();
   cmd.add_option("--object", a.object)->capture_default_str();
   cmd.add_option("--seed", a.seed)->capture_default_str();
-  cmd.add_option("--max-steps", a.max_steps, "training env steps cap [service: 200000]");
-  cmd.add_option("--target-success", a.target_success, "success to reach twice [0.95]");
-  cmd.add_option("--eval-interval", a.eval_interval, "training steps between evaluations [1000]");
-  cmd.add_option("--eval-episodes", a.eval_episodes, "episodes per evaluation [100]");
+  // Unset is the service's default; a typed 0 is refused, never taken as "unset".
+  cmd.add_option("--max-steps", a.max_steps, "training env steps cap [service: 200000]")
+      ->check(positive());
+  cmd.add_option("--target-success", a.target_success, "success to reach twice [0.95]")
+      ->check(success_rate());
+  cmd.add_option("--eval-interval", a.eval_interval, "training steps between evaluations [1000]")
+      ->check(positive());
+  cmd.add_option("--eval-episodes", a.eval_episodes, "episodes per evaluation [100]")
+      ->check(positive());
   cmd.add_option("--updates-per-transition", a.updates_per_transition,
                  "DDPG gradient steps per stored transition");
   cmd.add_option("--hidden", a.hidden, "hidden widths, e.g. 256,256,256")->delimiter(',');
-  cmd.add_option("--workers", a.workers, "A3C workers (hlc)");
+  cmd.add_option("--workers", a.workers, "A3C workers (hlc)")->check(positive());
   cmd.add_flag("--quiet", a.quiet, "no progress bar");
 }
 
@@ -131,9 +161,11 @@ int main(int argc, char** argv) {
       "pipeline",
       "train the three experts (chained), then the choreographer over them, promote, evaluate");
   add_train_options(*pipeline_cmd, pipeline.experts, false);
-  pipeline_cmd->add_option("--hlc-max-steps", pipeline.choreographer.max_steps,
-                           "choreographer step cap");
-  pipeline_cmd->add_option("--hlc-workers", pipeline.choreographer.workers, "A3C workers");
+  pipeline_cmd
+      ->add_option("--hlc-max-steps", pipeline.choreographer.max_steps, "choreographer step cap")
+      ->check(positive());
+  pipeline_cmd->add_option("--hlc-workers", pipeline.choreographer.workers, "A3C workers")
+      ->check(positive());
   pipeline_cmd->add_option("--held-out-episodes", pipeline.eval_episodes)->capture_default_str();
   pipeline_cmd->add_option("--held-out-seed", pipeline.eval_seed)->capture_default_str();
   pipeline_cmd->add_option("--wait", pipeline.wait_s, "seconds to wait for the services")
@@ -156,7 +188,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::fprintf(stderr, "pnpctl: error: %s\n", e.what());
+    return 2;
   }
   try {
     return command();

@@ -329,8 +329,9 @@ TEST(Pipeline, PnpctlReportsTheServicesRefusalsAndNothingIsStored) {
   const std::string prefix =
       "pnpctl: error: CreateTrainingRun (" + loopback(port) + "): INVALID_ARGUMENT: ";
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
-      {{"--max-steps", "-5"}, "max_steps: expected a positive integer, got -5"},
-      {{"--target-success", "1.5"}, "target_success: expected a value in (0, 1], got 1.500000"},
+      {{"--updates-per-transition", "-0.4"},
+       "updates_per_transition: expected a non-negative number (0: updates_per_cycle), got "
+       "-0.400000"},
       {{"--hidden", "0"}, "hidden[0]: expected a positive width, got 0"},
       {{"--algo", "a3c"},
        "algorithm: expected one of ddpg_her, bc, bc_offline for a subtask expert, got \"a3c\""},
