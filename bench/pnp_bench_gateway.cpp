@@ -15,6 +15,7 @@
 
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
+#include "common/percentile.h"
 #include "common/validate.h"
 #include "robot/gateway_config.h"
 #include "services/common/server_runtime.h"
@@ -44,8 +45,7 @@ double ping_p50_us(int port, int calls) {
     if (!stub->Ping(&context, {}, &response).ok()) throw std::runtime_error("Ping failed");
     us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
   }
-  std::sort(us.begin(), us.end());
-  return us[us.size() / 2];
+  return percentile(std::move(us), 0.5);
 }
 
 // GetState back to back: the state read's own cost, without the cycle's idle wait.
@@ -57,8 +57,7 @@ double get_state_p50_us(gateway::ControllerLink& controller, int calls) {
     controller.state();
     us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
   }
-  std::sort(us.begin(), us.end());
-  return us[us.size() / 2];
+  return percentile(std::move(us), 0.5);
 }
 
 // Episodes from `first_seed` on a fresh stand-in with `clock`, while `more` says so.

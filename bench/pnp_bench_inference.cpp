@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/percentile.h"
 #include "common/validate.h"
 #include "rl/choreographer_checkpoint.h"
 #include "rl/ddpg_her_agent.h"
@@ -54,10 +55,7 @@ void promote_random_hierarchy(store::RunStore& store) {
 struct Latencies {
   std::vector<double> us;
   double wall_s = 0;
-  double percentile(double q) {
-    std::sort(us.begin(), us.end());
-    return us[static_cast<std::size_t>(q * static_cast<double>(us.size() - 1))];
-  }
+  double percentile(double q) const { return pnp::percentile(us, q); }
   double qps() const { return static_cast<double>(us.size()) / wall_s; }
 };
 

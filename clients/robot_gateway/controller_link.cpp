@@ -1,6 +1,7 @@
 #include "clients/robot_gateway/controller_link.h"
 
 #include "services/common/status.h"
+#include "services/common/time_convert.h"
 
 namespace pnp::gateway {
 
@@ -40,9 +41,7 @@ void ControllerLink::acquire_lease(const std::string& client_name,
                                    std::chrono::milliseconds timeout) {
   rv1::AcquireLeaseRequest request;
   request.set_client_name(client_name);
-  const auto ns = std::chrono::nanoseconds(timeout).count();
-  request.mutable_timeout()->set_seconds(ns / 1'000'000'000);
-  request.mutable_timeout()->set_nanos(static_cast<int>(ns % 1'000'000'000));
+  services::to_proto(std::chrono::nanoseconds(timeout), *request.mutable_timeout());
   rv1::AcquireLeaseResponse response;
   services::throw_if_error(
       controller_->AcquireLease(context(rpc_timeout_).get(), request, &response), "AcquireLease",

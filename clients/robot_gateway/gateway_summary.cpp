@@ -4,16 +4,9 @@
 #include <map>
 #include <string>
 
+#include "common/percentile.h"
+
 namespace pnp::gateway {
-namespace {
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1))];
-}
-
-}  // namespace
 
 nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
   std::vector<double> cycles, state, inference;

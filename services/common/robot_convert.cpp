@@ -26,11 +26,4 @@ geometry::Pose from_proto(const robot::v1::Pose& pose) {
   return {from_proto(pose.position()), Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z())};
 }
 
-void to_proto(std::chrono::system_clock::time_point time, google::protobuf::Timestamp& out) {
-  const auto ns =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(time.time_since_epoch()).count();
-  out.set_seconds(ns / 1'000'000'000);
-  out.set_nanos(static_cast<int>(ns % 1'000'000'000));
-}
-
 }  // namespace pnp::services

@@ -1,5 +1,5 @@
 #pragma once
-// pnp.robot.v1 poses, positions and timestamps <-> core types, read the same way by
+// pnp.robot.v1 poses and positions <-> core types, read the same way by
 // pnp-robot-sim and pnp-robot-gateway.
 
 #include <Eigen/Core>
@@ -7,6 +7,7 @@
 
 #include "geometry/pose.h"
 #include "pnp/robot/v1/robot_controller.pb.h"
+#include "services/common/time_convert.h"  // timestamps in these messages
 
 namespace pnp::services {
 
@@ -15,7 +16,5 @@ void to_proto(const geometry::Pose& pose, robot::v1::Pose& out);
 geometry::Pose from_proto(const robot::v1::Pose& pose);
 Eigen::Vector3d from_proto(const robot::v1::Position& position);
 void to_proto(const Eigen::Vector3d& position, robot::v1::Position& out);
-
-void to_proto(std::chrono::system_clock::time_point time, google::protobuf::Timestamp& out);
 
 }  // namespace pnp::services

@@ -5,20 +5,11 @@
 #include "common/error.h"
 #include "services/common/robot_convert.h"
 #include "services/common/status.h"
+#include "services/common/time_convert.h"
 #include "services/robot_sim/feedback_convert.h"
 
 namespace pnp::services {
 namespace {
-
-double seconds_of(const google::protobuf::Duration& d) {
-  return static_cast<double>(d.seconds()) + 1e-9 * static_cast<double>(d.nanos());
-}
-
-void to_proto_duration(double seconds, google::protobuf::Duration& out) {
-  const auto ns = static_cast<std::int64_t>(std::llround(seconds * 1e9));
-  out.set_seconds(ns / 1'000'000'000);
-  out.set_nanos(static_cast<int>(ns % 1'000'000'000));
-}
 
 arm_sim::TargetRequest from_proto(const robot::v1::PoseTarget& target) {
   const geometry::Pose pose = services::from_proto(target.pose());
@@ -43,7 +34,8 @@ grpc::Status RobotControllerServiceImpl::AcquireLease(grpc::ServerContext*,
     }
     const auto lease = arm_.acquire_lease(request->client_name(), timeout_s);
     response->set_lease_id(lease.id);
-    to_proto_duration(lease.timeout_s, *response->mutable_timeout());
+    to_proto(std::chrono::nanoseconds(std::llround(lease.timeout_s * 1e9)),
+             *response->mutable_timeout());
     return grpc::Status::OK;
   });
 }
