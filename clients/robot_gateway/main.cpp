@@ -18,6 +18,7 @@
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
+#include "services/common/address.h"
 #include "services/common/server_runtime.h"
 
 int main(int argc, char** argv) {
@@ -50,6 +51,8 @@ int main(int argc, char** argv) {
     if (episodes < 1) {
       throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
     }
+    services::validate_address(controller_address, "--controller");
+    services::validate_address(inference_address, "--inference");
     const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
     // Ctrl-C or SIGTERM: the running episode stops the arm and ends.
     std::atomic<bool> interrupted{false}, finished{false};
@@ -104,6 +107,6 @@ int main(int argc, char** argv) {
     return interrupted.load() ? 130 : 0;
   } catch (const Error& e) {
     std::fprintf(stderr, "pnp-robot-gateway: %s\n", e.what());
-    return 1;
+    return e.code() == ErrorCode::kInvalidArgument ? 2 : 1;  // 2: bad usage or input
   }
 }
