@@ -41,8 +41,8 @@ void promote_random_hierarchy(store::RunStore& store) {
     rl::DdpgHerConfig config;  // 3 x 256
     Rng rng(1);
     rl::DdpgHerAgent agent(config, rng);
-    save(role, rl::save_expert({role, "ddpg_her", "fetch", "block", config.hidden, true, 200, 5,
-                                0.01, 0, 0, 0, "bench"},
+    save(role, rl::save_expert({role, "ddpg_her", "fetch", "block", config.hidden,
+                                config.hidden_activation, true, 200, 5, 0.01, 0, 0, 0, "bench"},
                                agent.actor(), nullptr, agent.observation_normalizer(),
                                agent.goal_normalizer()));
   }

@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Reproduce the paper's Table I and write docs/RESULTS.md", "pnp-paper-table"};
   int seeds = 3;
   std::uint64_t first_seed = 0;
-  bool quick = false, skip_bc = false, skip_e2e = false, skip_panda = false;
+  bool quick = false, skip_bc = false, skip_bc_original = false, skip_e2e = false,
+       skip_panda = false;
   long long e2e_max_steps = 1'500'000, expert_max_steps = 200'000, hlc_max_steps = 100'000;
   std::string out_dir = "docs", prefix = "chained";
   tools::ExperimentSettings s;
@@ -42,6 +43,13 @@ int main(int argc, char** argv) {
   app.add_option("--expert-max-steps", expert_max_steps)->capture_default_str();
   app.add_option("--hlc-max-steps", hlc_max_steps)->capture_default_str();
   app.add_flag("--skip-bc", skip_bc);
+  app.add_flag("--skip-bc-original", skip_bc_original,
+               "skip BC with the original code's networks and schedule (2 x 128 ELU, lr 1e-4, "
+               "one update per step)");
+  int bc_original_eval_interval = 5000;
+  app.add_option("--bc-original-eval-interval", bc_original_eval_interval,
+                 "training steps between evaluations of original-BC experts (they need many)")
+      ->capture_default_str();
   app.add_flag("--skip-e2e", skip_e2e);
   app.add_flag("--skip-panda", skip_panda,
                "skip the held-out evaluation of a hierarchy trained on panda");
@@ -78,6 +86,10 @@ int main(int argc, char** argv) {
     s.expert_stop = {expert_max_steps, expert_target, 1000, 100, 2};
     s.hlc_stop = {hlc_max_steps, 0.95, 1000, 100, 2};
     s.e2e_stop = {e2e_max_steps, 0.95, 10'000, 100, 2};
+    require_positive(bc_original_eval_interval, "--bc-original-eval-interval");
+    tools::ExperimentSettings bc_original = s;
+    bc_original.ddpg = rl::original_bc_config(s.ddpg);
+    bc_original.expert_stop.eval_interval_steps = bc_original_eval_interval;
     auto progress = [](const std::string& method, const std::string& role,
                        const rl::CurvePoint& p) {
       tools::print_progress(stderr, method + "/" + role, p);
@@ -89,6 +101,7 @@ int main(int argc, char** argv) {
     context.code_commit = kCodeCommit;
     context.quick = quick;
     context.settings = s;
+    context.bc_original_eval_interval = bc_original_eval_interval;
     const std::filesystem::path out(out_dir);
     // Rewritten after every finished run, so a long run's results are never lost.
     auto write_all = [&] {
@@ -107,22 +120,29 @@ int main(int argc, char** argv) {
     for (int k = 0; k < seeds; ++k) {
       const std::uint64_t seed = first_seed + static_cast<std::uint64_t>(k);
       context.seeds.push_back(seed);
-      runs.push_back(tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, seed, s, progress));
+      runs.push_back(
+          tools::run_hierarchy("ddpg_her", rl::ExpertAlgorithm::kDdpgHer, seed, s, progress));
       write_all();
       if (!skip_e2e) {
         runs.push_back(tools::run_end_to_end(seed, s, progress));
         write_all();
       }
       if (!skip_bc) {
-        runs.push_back(tools::run_hierarchy(rl::ExpertAlgorithm::kBcOnline, seed, s, progress));
+        runs.push_back(
+            tools::run_hierarchy("bc", rl::ExpertAlgorithm::kBcOnline, seed, s, progress));
+        write_all();
+      }
+      if (!skip_bc_original) {
+        runs.push_back(tools::run_hierarchy("bc_original", rl::ExpertAlgorithm::kBcOnline, seed,
+                                            bc_original, progress));
         write_all();
       }
     }
     if (!skip_panda) {
       tools::ExperimentSettings panda = s;
       panda.robot = sim::Robot::kPanda;
-      const auto r =
-          tools::run_hierarchy(rl::ExpertAlgorithm::kDdpgHer, first_seed, panda, progress);
+      const auto r = tools::run_hierarchy("ddpg_her", rl::ExpertAlgorithm::kDdpgHer, first_seed,
+                                          panda, progress);
       write_all();
       context.held_out.emplace_back("panda block, seed " + std::to_string(first_seed),
                                     r.held_out_success);

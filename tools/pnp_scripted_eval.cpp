@@ -1,5 +1,6 @@
-// pnp-scripted-eval: runs the three scripted experts in sequence over seeded episodes and
-// prints the success rate. Output depends only on the flags (never on --threads or time).
+// pnp-scripted-eval: runs the three scripted experts (or learned checkpoints, --experts) in
+// sequence over seeded episodes and prints the success rate and where the failures went
+// wrong. Output depends only on the flags (never on --threads or time).
 
 #include <array>
 #include <cstdio>
@@ -8,8 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "common/error.h"
 #include "common/validate.h"
+#include "nn/checkpoint_io.h"
+#include "rl/expert_checkpoint.h"
+#include "rl/learned_expert.h"
 #include "sim/scripted_evaluation.h"
+#include "sim/world_model.h"
 #include "tools/common/cli.h"
 
 namespace {
@@ -34,6 +40,8 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
           {"mean_final_distance_m", r.mean_final_distance_m},
           {"physics_faults", r.physics_faults},
           {"subtasks", subtasks},
+          {"failed_in_subtask", r.failed_in_subtask},
+          {"failed_after_all_done", r.failed_after_all_done},
           {"failed_episodes", r.failed_episodes}};
 }
 
@@ -52,6 +60,9 @@ void print_cell(const pnp::sim::ScriptedEvalReport& r) {
                 r.subtask_mean_steps[k]);
   }
   std::printf("  physics faults %d\n", r.physics_faults);
+  std::printf("  failures: in approach %d, manipulate %d, retract %d, after all done %d\n",
+              r.failed_in_subtask[0], r.failed_in_subtask[1], r.failed_in_subtask[2],
+              r.failed_after_all_done);
 }
 
 void print_summary_table(const std::vector<pnp::sim::ScriptedEvalReport>& reports) {
@@ -73,6 +84,78 @@ std::vector<T> select(const std::string& name, const std::array<T, N>& all,
   return {parse(name, field)};
 }
 
+// --experts: three comma-separated entries, each a checkpoint path or "scripted".
+std::vector<std::unique_ptr<pnp::sim::SubtaskPolicy>> load_experts(const std::string& list) {
+  using namespace pnp;
+  std::vector<std::string> entries;
+  std::size_t begin = 0;
+  for (std::size_t comma; (comma = list.find(',', begin)) != std::string::npos; begin = comma + 1)
+    entries.push_back(list.substr(begin, comma - begin));
+  entries.push_back(list.substr(begin));
+  if (entries.size() != sim::kNumSubtasks)
+    throw_invalid_argument("--experts", "three comma-separated checkpoints or \"scripted\"",
+                           "\"" + list + "\"");
+  std::vector<std::unique_ptr<sim::SubtaskPolicy>> out;
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    if (entries[k] == "scripted") {
+      out.push_back(std::make_unique<sim::ScriptedPolicy>());
+      continue;
+    }
+    rl::LoadedExpert e = rl::load_expert(nn::read_file(entries[k]));
+    const std::string role(sim::subtask_name(sim::kAllSubtasks[k]));
+    if (e.meta.role != role)
+      throw_invalid_argument("--experts[" + std::to_string(k) + "]", "a " + role + " checkpoint",
+                             "role " + e.meta.role);
+    out.push_back(std::make_unique<rl::LearnedExpert>(
+        rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
+        e.meta.learn_gripper));
+  }
+  return out;
+}
+
+pnp::sim::ScriptedEvalReport evaluate_experts(pnp::sim::Robot robot, pnp::sim::ObjectShape object,
+                                              const std::string& list, long long episodes,
+                                              std::uint64_t seed, std::size_t threads) {
+  using namespace pnp;
+  const auto experts = load_experts(list);
+  const sim::LocalEnvFactory envs(sim::WorldModel::load(robot, object));
+  ThreadPool pool(threads);
+  return sim::evaluate_pipeline(envs, {experts[0].get(), experts[1].get(), experts[2].get()},
+                                episodes, seed, pool);
+}
+
+// Replays episode `index` of the evaluation (same seed derivation) and prints every step.
+void trace_episode(pnp::sim::Robot robot, pnp::sim::ObjectShape object, const std::string& list,
+                   std::uint64_t seed, long long index) {
+  using namespace pnp;
+  std::vector<std::unique_ptr<sim::SubtaskPolicy>> experts;
+  if (list.empty()) {
+    for (std::size_t k = 0; k < sim::kNumSubtasks; ++k)
+      experts.push_back(std::make_unique<sim::ScriptedPolicy>());
+  } else {
+    experts = load_experts(list);
+  }
+  const auto env = sim::LocalEnvFactory(sim::WorldModel::load(robot, object)).make();
+  const std::uint64_t episode_seed = derive_seed(seed, static_cast<std::uint64_t>(index));
+  std::printf(
+      "episode %lld (seed %llu): step subtask | action xyz grip | gripper | object | "
+      "finger gap | object to goal\n",
+      index, static_cast<unsigned long long>(episode_seed));
+  const auto outcome = sim::run_pipeline_episode(
+      *env, {experts[0].get(), experts[1].get(), experts[2].get()}, episode_seed,
+      [](int step, std::optional<sim::Subtask> acting, const sim::Action& a,
+         const sim::TaskState& s) {
+        std::printf(
+            "%2d %-10s | %+.2f %+.2f %+.2f %+.2f | %.3f %.3f %.3f | %.3f %.3f %.3f | %.4f | "
+            "%.3f\n",
+            step, acting ? std::string(sim::subtask_name(*acting)).c_str() : "idle", a[0], a[1],
+            a[2], a[3], s.gripper.x(), s.gripper.y(), s.gripper.z(), s.object.x(), s.object.y(),
+            s.object.z(), s.finger_gap_m, (s.object - s.episode_goal).norm());
+      });
+  std::printf("success %d, physics fault %d, final distance %.3f m\n", outcome.success ? 1 : 0,
+              outcome.physics_fault ? 1 : 0, outcome.final_distance_m);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -84,6 +167,12 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 0;
   std::size_t threads = 0;
   bool json = false;
+  std::string experts;
+  long long trace = -1;
+  app.add_option("--trace", trace, "print every step of this episode index instead of evaluating");
+  app.add_option("--experts", experts,
+                 "approach,manipulate,retract: checkpoint paths or \"scripted\" (default: all "
+                 "scripted)");
   app.add_option("--robot", robot, "fetch, panda or all")->capture_default_str();
   app.add_option("--object", object, "block, small_block, cylinder or all")->capture_default_str();
   app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")
@@ -98,10 +187,19 @@ int main(int argc, char** argv) {
     const auto robots = select(robot, pnp::sim::kAllRobots, &pnp::sim::parse_robot, "--robot");
     const auto objects =
         select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
+    if (trace >= 0) {
+      if (robots.size() != 1 || objects.size() != 1)
+        pnp::throw_invalid_argument("--trace", "one --robot and one --object", "\"all\"");
+      trace_episode(robots.front(), objects.front(), experts, seed, trace);
+      return;
+    }
     std::vector<pnp::sim::ScriptedEvalReport> reports;
     for (auto r : robots) {
-      for (auto o : objects)
-        reports.push_back(pnp::sim::evaluate_scripted(r, o, episodes, seed, threads));
+      for (auto o : objects) {
+        reports.push_back(experts.empty()
+                              ? pnp::sim::evaluate_scripted(r, o, episodes, seed, threads)
+                              : evaluate_experts(r, o, experts, episodes, seed, threads));
+      }
     }
     if (reports.size() == 1) {
       if (json) {

@@ -26,7 +26,7 @@ using namespace pnp;
 struct Options {
   training::TrainingSpec spec;
   std::string robot = "fetch", object = "block", out = "runs/latest";
-  std::string init, experts, prefix = "scripted";
+  std::string init, experts, prefix = "scripted", activation = "relu";
   bool json = false, quiet = false;
   std::size_t threads = 0;
 };
@@ -35,6 +35,8 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   rl::DdpgHerConfig& d = o.spec.ddpg;
   app.add_option("--hidden", d.hidden, "hidden widths of actor and critic")
       ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--activation", o.activation, "hidden activation: relu, elu or tanh")
       ->capture_default_str();
   app.add_option("--batch-size", d.batch_size)->capture_default_str();
   app.add_option("--buffer-size", d.buffer_size)->capture_default_str();
@@ -122,6 +124,7 @@ std::vector<std::string> expert_specs(const Options& o) {
 
 nlohmann::json train(Options& o) {
   o.spec.robot = sim::parse_robot(o.robot, "--robot");
+  o.spec.ddpg.hidden_activation = nn::parse_activation(o.activation, "--activation");
   o.spec.object = sim::parse_object(o.object, "--object");
   training::TrainingInputs inputs;
   if (!o.init.empty()) inputs.init = nn::read_file(o.init);

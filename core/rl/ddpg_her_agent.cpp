@@ -12,10 +12,10 @@ constexpr int kGoal = sim::kGoalSize;
 constexpr int kAct = sim::kActionSize;
 
 nn::MlpSpec actor_spec(const DdpgHerConfig& c) {
-  return {kPolicyInputs, c.hidden, kAct, nn::Activation::kReLU, nn::Activation::kTanh};
+  return {kPolicyInputs, c.hidden, kAct, c.hidden_activation, nn::Activation::kTanh};
 }
 nn::MlpSpec critic_spec(const DdpgHerConfig& c) {
-  return {kPolicyInputs + kAct, c.hidden, 1, nn::Activation::kReLU, nn::Activation::kNone};
+  return {kPolicyInputs + kAct, c.hidden, 1, c.hidden_activation, nn::Activation::kNone};
 }
 
 // Normalises one column of raw float inputs (observation or goal) in place.

@@ -1,9 +1,9 @@
 #pragma once
 // DDPG with hindsight experience replay for one goal-conditioned expert.
 //
-// Actor:  [normalised observation (25), normalised goal (3)] -> hidden (ReLU) -> 4, tanh.
-// Critic: [normalised observation, normalised goal, action (4)] -> hidden (ReLU) -> 1.
-// Critic target r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0] (the
+// Actor:  [normalised observation (25), normalised goal (3)] -> hidden (ReLU by default) -> 4,
+// tanh. Critic: [normalised observation, normalised goal, action (4)] -> hidden (same activation)
+// -> 1. Critic target r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0] (the
 // rewards are minus distances); actor loss -Q(s, pi(s)) + action_l2 * mean(pi(s)^2).
 
 #include <span>

@@ -22,6 +22,11 @@ void DdpgHerConfig::validate() const {
                              std::to_string(hidden[i]));
     }
   }
+  if (hidden_activation != nn::Activation::kReLU && hidden_activation != nn::Activation::kELU &&
+      hidden_activation != nn::Activation::kTanh) {
+    throw_invalid_argument("hidden_activation", "relu, elu or tanh",
+                           std::string(nn::activation_name(hidden_activation)));
+  }
   require(actor_learning_rate > 0 && std::isfinite(actor_learning_rate), "actor_learning_rate",
           "a positive finite number", actor_learning_rate);
   require(critic_learning_rate > 0 && std::isfinite(critic_learning_rate), "critic_learning_rate",
@@ -52,6 +57,15 @@ void DdpgHerConfig::validate() const {
   require(demo_episodes >= 0, "demo_episodes", "a non-negative integer", demo_episodes);
   require(demo_pretrain_updates >= 0, "demo_pretrain_updates", "a non-negative integer",
           demo_pretrain_updates);
+}
+
+DdpgHerConfig original_bc_config(DdpgHerConfig base) {
+  base.hidden = {128, 128};
+  base.hidden_activation = nn::Activation::kELU;
+  base.actor_learning_rate = 1e-4;
+  base.batch_size = 1;
+  base.updates_per_transition = 1.0;
+  return base;
 }
 
 }  // namespace pnp::rl

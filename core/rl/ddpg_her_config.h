@@ -4,10 +4,13 @@
 
 #include <vector>
 
+#include "nn/activation.h"
+
 namespace pnp::rl {
 
 struct DdpgHerConfig {
-  std::vector<int> hidden{256, 256, 256};  // actor and critic hidden widths
+  std::vector<int> hidden{256, 256, 256};                    // actor and critic hidden widths
+  nn::Activation hidden_activation = nn::Activation::kReLU;  // the original BC used ELU
   double actor_learning_rate = 1e-3;
   double critic_learning_rate = 1e-3;
   double gamma = 0.98;
@@ -46,5 +49,11 @@ struct DdpgHerConfig {
   // Throws INVALID_ARGUMENT naming the field and the expected value.
   void validate() const;
 };
+
+// The original code's behaviour-cloning networks and schedule, for the paper-faithful BC
+// row: 2 x 128 ELU, Adam 1e-4, one gradient step per environment step on one labelled
+// state (here drawn from the labelled replay). The original's Gaussian heads are not
+// reproduced: the learner explores with base's action noise, as every expert here does.
+DdpgHerConfig original_bc_config(DdpgHerConfig base);
 
 }  // namespace pnp::rl

@@ -18,21 +18,23 @@ constexpr const char* kKind = "subtask_expert";
 std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& actor,
                                       const nn::Mlp* critic, const nn::Normalizer& obs_norm,
                                       const nn::Normalizer& goal_norm) {
-  const nlohmann::json j = {{"kind", kKind},
-                            {"role", meta.role},
-                            {"algorithm", meta.algorithm},
-                            {"robot", meta.robot},
-                            {"object", meta.object},
-                            {"hidden", meta.hidden},
-                            {"learn_gripper", meta.learn_gripper},
-                            {"clip_obs", meta.clip_obs},
-                            {"norm_clip", meta.norm_clip},
-                            {"norm_std_floor", meta.norm_std_floor},
-                            {"train_env_steps", meta.train_env_steps},
-                            {"eval_success", meta.eval_success},
-                            {"seed", meta.seed},
-                            {"code_commit", meta.code_commit},
-                            {"has_critic", critic != nullptr}};
+  const nlohmann::json j = {
+      {"kind", kKind},
+      {"role", meta.role},
+      {"algorithm", meta.algorithm},
+      {"robot", meta.robot},
+      {"object", meta.object},
+      {"hidden", meta.hidden},
+      {"hidden_activation", std::string(nn::activation_name(meta.hidden_activation))},
+      {"learn_gripper", meta.learn_gripper},
+      {"clip_obs", meta.clip_obs},
+      {"norm_clip", meta.norm_clip},
+      {"norm_std_floor", meta.norm_std_floor},
+      {"train_env_steps", meta.train_env_steps},
+      {"eval_success", meta.eval_success},
+      {"seed", meta.seed},
+      {"code_commit", meta.code_commit},
+      {"has_critic", critic != nullptr}};
   nn::CheckpointWriter w;
   write_meta(w, j);
   w.add_floats("actor", actor.params());
@@ -52,6 +54,12 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.robot = m.at("robot");
     out.object = m.at("object");
     out.hidden = m.at("hidden").get<std::vector<int>>();
+    // Checkpoints written before the field existed are ReLU networks.
+    const auto activation = m.find("hidden_activation");
+    out.hidden_activation = activation == m.end()
+                                ? nn::Activation::kReLU
+                                : nn::parse_activation(activation->get_ref<const std::string&>(),
+                                                       "checkpoint hidden_activation");
     out.learn_gripper = m.at("learn_gripper");
     out.clip_obs = m.at("clip_obs");
     out.norm_clip = m.at("norm_clip");
@@ -62,11 +70,11 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.code_commit = m.value("code_commit", "");
     return out;
   });
-  nn::Mlp actor({kPolicyInputs, meta.hidden, kAct, nn::Activation::kReLU, nn::Activation::kTanh});
+  nn::Mlp actor({kPolicyInputs, meta.hidden, kAct, meta.hidden_activation, nn::Activation::kTanh});
   nn::copy_into(actor.params(), r.floats("actor", actor.params().size()));
   std::optional<nn::Mlp> critic;
   if (j.value("has_critic", false)) {
-    critic.emplace(nn::MlpSpec{kPolicyInputs + kAct, meta.hidden, 1, nn::Activation::kReLU,
+    critic.emplace(nn::MlpSpec{kPolicyInputs + kAct, meta.hidden, 1, meta.hidden_activation,
                                nn::Activation::kNone});
     nn::copy_into(critic->params(), r.floats("critic", critic->params().size()));
   }

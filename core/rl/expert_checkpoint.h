@@ -20,6 +20,7 @@ struct ExpertMeta {
   std::string algorithm;  // ddpg_her or bc
   std::string robot, object;
   std::vector<int> hidden;
+  nn::Activation hidden_activation = nn::Activation::kReLU;
   bool learn_gripper = true;
   double clip_obs = 200, norm_clip = 5, norm_std_floor = 0.01;
   long long train_env_steps = 0;

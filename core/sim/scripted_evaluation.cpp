@@ -34,7 +34,15 @@ ScriptedEvalReport summarise(const std::vector<EpisodeOutcome>& outcomes) {
     distance += o.final_distance_m;
     r.env_steps += o.env_steps;
     r.physics_faults += o.physics_fault ? 1 : 0;
-    if (!o.success) r.failed_episodes.push_back(static_cast<int>(i));
+    if (!o.success) {
+      r.failed_episodes.push_back(static_cast<int>(i));
+      const auto first = std::find(o.subtask_done.begin(), o.subtask_done.end(), false);
+      if (first == o.subtask_done.end()) {
+        ++r.failed_after_all_done;
+      } else {
+        ++r.failed_in_subtask[static_cast<std::size_t>(first - o.subtask_done.begin())];
+      }
+    }
     for (std::size_t k = 0; k < kNumSubtasks; ++k) {
       r.subtask_success_rate[k] += o.subtask_done[k] ? 1 : 0;
       r.subtask_mean_steps[k] += o.subtask_steps[k];

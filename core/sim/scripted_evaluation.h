@@ -31,6 +31,10 @@ struct ScriptedEvalReport {
   double mean_final_distance_m = 0;
   int physics_faults = 0;
   std::vector<int> failed_episodes;  // indices, for reproduction with --seed
+  // Where the failed episodes went wrong: the first subtask that never met its predicate,
+  // or (failed_after_all_done) every predicate met but the object not at the goal at the end.
+  std::array<int, kNumSubtasks> failed_in_subtask{};
+  int failed_after_all_done = 0;
 };
 
 // episodes and threads must be positive (threads == 0: one per hardware thread).

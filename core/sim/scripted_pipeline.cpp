@@ -6,7 +6,7 @@
 namespace pnp::sim {
 
 EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& policies,
-                                    std::uint64_t seed) {
+                                    std::uint64_t seed, const PipelineStepObserver& observer) {
   EpisodeOutcome out;
   env.reset(seed);
   SubtaskSequence sequence;
@@ -21,6 +21,11 @@ EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& pol
                                     sequence.current(), env.observation(), goal, state);
     last = env.step(action, goal, objective);
     ++out.env_steps;
+    if (observer) {
+      observer(env.elapsed_steps(),
+               sequence.idle() ? std::nullopt : std::optional<Subtask>(sequence.current()), action,
+               env.task_state());
+    }
     if (last.fault != PhysicsFault::kNone) {
       out.physics_fault = true;
       break;

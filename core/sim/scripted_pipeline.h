@@ -7,6 +7,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <optional>
 
 #include "sim/environment.h"
 #include "sim/subtask.h"
@@ -26,8 +28,13 @@ struct EpisodeOutcome {
 
 using SubtaskPolicies = std::array<SubtaskPolicy*, kNumSubtasks>;
 
+// Sees every step after it is taken: the subtask that acted (none when idle), the action
+// and the state it led to. For tracing an episode; never changes it.
+using PipelineStepObserver = std::function<void(int step, std::optional<Subtask> acting,
+                                                const Action& action, const TaskState& after)>;
+
 EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& policies,
-                                    std::uint64_t seed);
+                                    std::uint64_t seed, const PipelineStepObserver& observer = {});
 
 // All three experts scripted.
 EpisodeOutcome run_scripted_episode(Environment& env, std::uint64_t seed);

@@ -71,15 +71,22 @@ bool is_grasped(const TaskState& s) {
   return objective_done_for_goal(Objective::kManipulate, s, s.object);
 }
 
+bool is_held(const TaskState& s) {
+  return (s.gripper - s.object).norm() < thresholds::kHoldTolerance_m &&
+         s.finger_gap_m < s.object_width_m + thresholds::kGraspGapSlack_m;
+}
+
 bool objective_done_for_goal(Objective objective, const TaskState& s, const Eigen::Vector3d& goal) {
   switch (objective) {
     case Objective::kApproach:
-      return (s.gripper - goal).norm() < thresholds::kApproachTolerance_m;
+      return (s.gripper - goal).norm() < thresholds::kApproachTolerance_m &&
+             s.finger_gap_m > s.object_width_m + thresholds::kPreGraspOpening_m;
     case Objective::kManipulate:  // the grasp predicate, centred on `goal`
       return (s.gripper - goal).norm() < thresholds::kGraspTolerance_m &&
              s.finger_gap_m < s.object_width_m + thresholds::kGraspGapSlack_m;
-    case Objective::kRetract:
-      return (s.object - goal).norm() < thresholds::kRetractTolerance_m;
+    case Objective::kRetract:  // held there: a dropped object that rests at `goal` is not
+                               // done, or relabelled goals would teach letting go early
+      return (s.object - goal).norm() < thresholds::kRetractTolerance_m && is_held(s);
     case Objective::kTask:
       return false;  // the whole task runs to the episode's end
   }

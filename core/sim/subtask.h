@@ -5,9 +5,9 @@
 // set of thresholds governs them all.
 //
 //   subtask     goal                          achieved   ends when
-//   approach    object + (0, 0, 0.03)         gripper    gripper within 0.02 m of it
+//   approach    object + (0, 0, 0.03)         gripper    gripper within 0.02 m of it, open
 //   manipulate  object centre                 gripper    object grasped (see below)
-//   retract     episode goal                  object     object within 0.01 m of it
+//   retract     episode goal                  object     object within 0.01 m of it, held
 //
 // An Objective is what one step is scored against: one of the subtasks, or the whole
 // task (end-to-end policies: achieved = object, goal = episode goal, never "done").
@@ -32,9 +32,15 @@ inline constexpr std::array<Objective, 4> kAllObjectives{
 namespace thresholds {
 inline constexpr double kPreGraspHeight_m = 0.03;     // approach target above the object
 inline constexpr double kApproachTolerance_m = 0.02;  // approach done within this
-inline constexpr double kGraspTolerance_m = 0.015;    // gripper this close to the object centre
-inline constexpr double kGraspGapSlack_m = 0.004;     // pads within this of the object's width
-inline constexpr double kRetractTolerance_m = 0.01;   // retract done within this of the goal
+// ... with the pads this far clear of the object's width: a pre-grasp pose with closed
+// fingers made manipulate push the object away while opening on the way down.
+inline constexpr double kPreGraspOpening_m = 0.01;
+inline constexpr double kGraspTolerance_m = 0.015;   // gripper this close to the object centre
+inline constexpr double kGraspGapSlack_m = 0.004;    // pads within this of the object's width
+inline constexpr double kRetractTolerance_m = 0.01;  // retract done within this of the goal
+// Held (retract): pads closed on the object and the gripper within this of its centre;
+// looser than the grasp tolerance, since a carried object may shift in the hand.
+inline constexpr double kHoldTolerance_m = 0.03;
 inline constexpr int kApproachStepCap = 20;
 inline constexpr int kManipulateStepCap = 15;
 inline constexpr int kRetractStepCap = 50;  // the rest of the episode
@@ -68,8 +74,10 @@ bool objective_done(Objective objective, const TaskState& s);
 bool objective_done_for_goal(Objective objective, const TaskState& s, const Eigen::Vector3d& goal);
 int step_cap(Subtask subtask);
 
-// The object is held: gripper centred on it and the pads closed onto its sides.
+// The object is grasped: gripper centred on it and the pads closed onto its sides.
 bool is_grasped(const TaskState& s);
+// The object is still in the hand: pads closed on it, gripper near its centre.
+bool is_held(const TaskState& s);
 
 // Dense reward: minus the Euclidean distance. Pure, so HER can relabel with it.
 double compute_reward(const Eigen::Vector3d& achieved, const Eigen::Vector3d& goal);

@@ -77,6 +77,7 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
                           std::string(sim::robot_name(spec.robot)),
                           std::string(sim::object_name(spec.object)),
                           config.ddpg.hidden,
+                          config.ddpg.hidden_activation,
                           config.ddpg.learn_gripper,
                           config.ddpg.clip_obs,
                           config.ddpg.norm_clip,

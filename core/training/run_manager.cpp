@@ -76,10 +76,11 @@ void check_parent_shape(const TrainingSpec& spec, const store::Checkpoint& paren
                              "another shape");
     return;
   }
-  const auto hidden = rl::load_expert(parent.blob).meta.hidden;
-  if (hidden != spec.ddpg.hidden) {
-    throw_invalid_argument("parent_checkpoint_id", "an expert with the run's hidden widths",
-                           "checkpoint " + std::to_string(parent.info.id) + " with other widths");
+  const rl::ExpertMeta meta = rl::load_expert(parent.blob).meta;
+  if (meta.hidden != spec.ddpg.hidden || meta.hidden_activation != spec.ddpg.hidden_activation) {
+    throw_invalid_argument("parent_checkpoint_id",
+                           "an expert with the run's hidden widths and activation",
+                           "checkpoint " + std::to_string(parent.info.id) + " of another shape");
   }
 }
 

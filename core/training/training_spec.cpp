@@ -66,6 +66,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
           {"scripted_gripper", s.scripted_gripper},
           {"ddpg",
            {{"hidden", d.hidden},
+            {"hidden_activation", std::string(nn::activation_name(d.hidden_activation))},
             {"actor_learning_rate", d.actor_learning_rate},
             {"critic_learning_rate", d.critic_learning_rate},
             {"gamma", d.gamma},
@@ -136,6 +137,9 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     rl::DdpgHerConfig& d = s.ddpg;
     const std::string p = "ddpg.";
     read(*ddpg, "hidden", d.hidden, p);
+    std::string activation(nn::activation_name(d.hidden_activation));
+    read(*ddpg, "hidden_activation", activation, p);
+    d.hidden_activation = nn::parse_activation(activation, p + "hidden_activation");
     read(*ddpg, "actor_learning_rate", d.actor_learning_rate, p);
     read(*ddpg, "critic_learning_rate", d.critic_learning_rate, p);
     read(*ddpg, "gamma", d.gamma, p);

@@ -28,8 +28,9 @@ std::vector<std::uint8_t> expert_blob(const std::string& role, std::uint64_t see
   config.hidden = {16};
   Rng rng(seed);
   rl::DdpgHerAgent agent(config, rng);
-  const rl::ExpertMeta meta{role, "ddpg_her", "fetch", "block", config.hidden, true,  200,
-                            5,    0.01,       0,       0,       seed,          "test"};
+  const rl::ExpertMeta meta{
+      role, "ddpg_her", "fetch", "block", config.hidden, config.hidden_activation, true, 200, 5,
+      0.01, 0,          0,       seed,    "test"};
   return rl::save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
                          agent.goal_normalizer());
 }

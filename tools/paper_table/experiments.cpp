@@ -25,10 +25,9 @@ void add(MethodRun& run, std::string role, rl::TrainingResult result) {
 
 }  // namespace
 
-MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
-                        const ExperimentSettings& s, const Progress& progress) {
+MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm,
+                        std::uint64_t seed, const ExperimentSettings& s, const Progress& progress) {
   const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object));
-  const std::string method = algorithm == rl::ExpertAlgorithm::kDdpgHer ? "ddpg_her" : "bc";
   MethodRun run{method, seed, {}, true, 0, 0, -1};
   std::vector<std::unique_ptr<rl::LearnedExpert>> experts;
   for (sim::Subtask subtask : sim::kAllSubtasks) {

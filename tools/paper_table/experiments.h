@@ -35,7 +35,7 @@ struct RoleRun {
 };
 
 struct MethodRun {
-  std::string method;  // ddpg_her, bc, e2e
+  std::string method;  // ddpg_her, bc, bc_original, e2e
   std::uint64_t seed = 0;
   std::vector<RoleRun> roles;
   bool reached = false;          // every part reached the target
@@ -47,8 +47,9 @@ struct MethodRun {
 using Progress =
     std::function<void(const std::string& method, const std::string& role, const rl::CurvePoint&)>;
 
-MethodRun run_hierarchy(rl::ExpertAlgorithm algorithm, std::uint64_t seed,
-                        const ExperimentSettings& s, const Progress& progress);
+// `method` labels the run (ddpg_her, bc or bc_original); s.ddpg carries its networks.
+MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm,
+                        std::uint64_t seed, const ExperimentSettings& s, const Progress& progress);
 MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s, const Progress& progress);
 
 }  // namespace pnp::tools

@@ -61,6 +61,7 @@ Stats role_steps(const std::vector<const MethodRun*>& runs, const std::string& r
 std::string method_label(const std::string& m) {
   if (m == "ddpg_her") return "DDPG+HER experts + HLC";
   if (m == "bc") return "BC experts + HLC";
+  if (m == "bc_original") return "BC experts (original networks) + HLC";
   return "End-to-end DDPG+HER";
 }
 
@@ -97,12 +98,19 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
                         c.settings.ddpg.updates_per_cycle, c.settings.ddpg.episodes_per_cycle),
       c.settings.ddpg.demo_episodes, c.settings.a3c.workers, c.settings.a3c.learning_rate,
       c.settings.a3c.gamma, c.settings.a3c.entropy_weight);
+  md += fmt::format(
+      "BC experts are trained DAgger-style, as in the original code: the learner acts (with the "
+      "same exploration noise as DDPG+HER) and every state it visits is labelled with the "
+      "scripted expert's action. \"BC experts\" use the DDPG+HER actor's network and schedule; "
+      "\"BC experts (original networks)\" use the original code's: 2 x 128 ELU, Adam 1e-4, one "
+      "gradient step on one labelled state per stored transition, evaluated every {} steps.\n\n",
+      c.bc_original_eval_interval);
   md += "## Steps and time to the target\n\n";
   md +=
       "| method | LSE1 approach | LSE2 manipulate | LSE3 retract | HLC | total steps | total time "
       "|\n";
   md += "|---|---|---|---|---|---|---|\n";
-  for (const std::string method : {"e2e", "bc", "ddpg_her"}) {
+  for (const std::string method : {"e2e", "bc_original", "bc", "ddpg_her"}) {
     const auto rs = of_method(runs, method);
     if (rs.empty()) continue;
     std::vector<double> totals, walls;
@@ -180,9 +188,9 @@ std::string curves_csv(const std::vector<MethodRun>& runs) {
 // (approach, manipulate, retract, then the choreographer), as in the paper's Fig. 5.
 std::string curves_svg(const std::vector<MethodRun>& runs) {
   const std::map<std::string, std::string> colour{
-      {"ddpg_her", "#1f77b4"}, {"bc", "#ff7f0e"}, {"e2e", "#2ca02c"}};
+      {"ddpg_her", "#1f77b4"}, {"bc", "#ff7f0e"}, {"bc_original", "#9467bd"}, {"e2e", "#2ca02c"}};
   std::vector<plot::Series> series;
-  for (const std::string method : {"ddpg_her", "bc", "e2e"}) {
+  for (const std::string method : {"ddpg_her", "bc", "bc_original", "e2e"}) {
     for (const auto& r : runs) {
       if (r.method != method) continue;
       plot::Series s{method_label(method), colour.at(method), {}};

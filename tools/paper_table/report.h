@@ -15,6 +15,7 @@ struct ReportContext {
   std::vector<std::uint64_t> seeds;
   bool quick = false;
   ExperimentSettings settings;
+  int bc_original_eval_interval = 0;  // training steps between its evaluations
   std::vector<std::pair<std::string, double>>
       held_out;  // "robot object" -> success (1000 episodes)
 };

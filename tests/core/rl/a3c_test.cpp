@@ -101,8 +101,20 @@ TEST(ChoreographerCheckpoint, AnExpertCheckpointIsRefusedByKind) {
   config.hidden = {8};
   Rng rng(1);
   DdpgHerAgent agent(config, rng);
-  const ExpertMeta meta{"approach", "ddpg_her", "fetch", "block", config.hidden, true, 200, 5,
-                        0.01,       10,         0.5,     1,       "test"};
+  const ExpertMeta meta{"approach",
+                        "ddpg_her",
+                        "fetch",
+                        "block",
+                        config.hidden,
+                        config.hidden_activation,
+                        true,
+                        200,
+                        5,
+                        0.01,
+                        10,
+                        0.5,
+                        1,
+                        "test"};
   const auto bytes = save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
                                  agent.goal_normalizer());
   try {

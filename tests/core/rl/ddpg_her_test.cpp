@@ -44,19 +44,22 @@ TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
 TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
   DdpgHerConfig config;
   config.hidden = {32, 32};
+  config.hidden_activation = nn::Activation::kELU;  // not the default: the file must carry it
   Rng rng(5);
   DdpgHerAgent agent(config, rng);
   std::vector<sim::Observation> obs{sim::Observation::Constant(0.3),
                                     sim::Observation::Constant(-0.2)};
   std::vector<sim::Goal> goals{sim::Goal(1, 0.7, 0.5), sim::Goal(1.2, 0.8, 0.4)};
   agent.update_normalizers(obs, goals);
-  ExpertMeta meta{"retract", "ddpg_her", "fetch", "block", config.hidden, true, 200, 5,
-                  0.01,      1000,       0.9,     5,       "test"};
+  ExpertMeta meta{"retract", "ddpg_her", "fetch", "block", config.hidden, config.hidden_activation,
+                  true,      200,        5,       0.01,    1000,          0.9,
+                  5,         "test"};
   const auto bytes = save_expert(meta, agent.actor(), &agent.critic(),
                                  agent.observation_normalizer(), agent.goal_normalizer());
   const LoadedExpert loaded = load_expert(bytes);
   EXPECT_EQ(loaded.meta.role, "retract");
   EXPECT_EQ(loaded.meta.hidden, config.hidden);
+  EXPECT_EQ(loaded.meta.hidden_activation, nn::Activation::kELU);
   ActorSnapshot original = agent.snapshot();
   ActorSnapshot restored(loaded.actor, loaded.observation_normalizer, loaded.goal_normalizer,
                          loaded.meta.clip_obs);

@@ -9,8 +9,8 @@
 namespace pnp::rl {
 namespace {
 
-// A segment whose gripper moves along x from x0 by 0.01 per step (approach objective:
-// achieved goal = gripper position).
+// A segment whose gripper moves along x from x0 by 0.01 per step, fingers open (approach
+// objective: achieved goal = gripper position).
 std::vector<Transition> segment(double x0, int length, const sim::Goal& goal) {
   std::vector<Transition> out;
   for (int t = 0; t < length; ++t) {
@@ -19,6 +19,8 @@ std::vector<Transition> segment(double x0, int length, const sim::Goal& goal) {
     tr.observation(sim::obs::kGripperPos) = x0 + 0.01 * t;
     tr.next_observation = sim::Observation::Zero();
     tr.next_observation(sim::obs::kGripperPos) = x0 + 0.01 * (t + 1);
+    for (sim::Observation* o : {&tr.observation, &tr.next_observation})
+      (*o)(sim::obs::kFingerPos) = (*o)(sim::obs::kFingerPos + 1) = 0.05;
     tr.action = sim::Action(0.2, 0, 0, 1);
     tr.goal = goal;
     out.push_back(tr);

@@ -30,6 +30,19 @@ TEST(Approach, DoneWithinTheToleranceOfThePreGraspPoint) {
                               state_with(pre + Eigen::Vector3d(0.021, 0, 0), kObject)));
 }
 
+TEST(Approach, NotDoneWithTheFingersClosed) {
+  const Eigen::Vector3d pre = kObject + Eigen::Vector3d(0, 0, thresholds::kPreGraspHeight_m);
+  const double width = 0.05;  // state_with's object
+  EXPECT_FALSE(objective_done(Objective::kApproach, state_with(pre, kObject, 0.0)));
+  EXPECT_FALSE(
+      objective_done(Objective::kApproach,
+                     state_with(pre, kObject, width + thresholds::kPreGraspOpening_m - 0.001)))
+      << "pads not clear of the object";
+  EXPECT_TRUE(
+      objective_done(Objective::kApproach,
+                     state_with(pre, kObject, width + thresholds::kPreGraspOpening_m + 0.001)));
+}
+
 TEST(Manipulate, DoneOnlyWhenCentredAndClosedOnTheObject) {
   const Eigen::Vector3d near = kObject + Eigen::Vector3d(0, 0, 0.01);
   EXPECT_TRUE(objective_done(Objective::kManipulate, state_with(near, kObject, 0.051)));
@@ -47,10 +60,24 @@ TEST(Retract, ScoredOnTheObjectAgainstTheEpisodeGoal) {
   EXPECT_EQ(achieved_goal(Objective::kRetract, s), s.object);
   EXPECT_FALSE(objective_done(Objective::kRetract, s));
   s.object = s.episode_goal + Eigen::Vector3d(0, 0.009, 0);
+  s.gripper = s.object + Eigen::Vector3d(0, 0, 0.02);  // held, shifted in the hand
   EXPECT_TRUE(objective_done(Objective::kRetract, s));
-  s.gripper = s.episode_goal;  // where the gripper is does not matter
+  s.gripper = s.episode_goal;  // the gripper at the goal does not count
   s.object = kObject;
   EXPECT_FALSE(objective_done(Objective::kRetract, s));
+}
+
+TEST(Retract, ADroppedObjectAtTheGoalIsNotDone) {
+  TaskState s = state_with(kObject, kObject, 0.05);
+  s.object = s.episode_goal;
+  s.gripper = s.object + Eigen::Vector3d(0, 0, 0.05);  // let go above it
+  s.finger_gap_m = 0.0;
+  EXPECT_FALSE(objective_done(Objective::kRetract, s));
+  s.gripper = s.object;
+  s.finger_gap_m = 0.1;  // opened around it
+  EXPECT_FALSE(objective_done(Objective::kRetract, s));
+  s.finger_gap_m = 0.05;
+  EXPECT_TRUE(objective_done(Objective::kRetract, s));
 }
 
 TEST(StepCaps, DefinedOncePerSubtask) {
