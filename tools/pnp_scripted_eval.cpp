@@ -101,14 +101,9 @@ std::vector<std::unique_ptr<pnp::sim::SubtaskPolicy>> load_experts(const std::st
       out.push_back(std::make_unique<sim::ScriptedPolicy>());
       continue;
     }
-    rl::LoadedExpert e = rl::load_expert(nn::read_file(entries[k]));
-    const std::string role(sim::subtask_name(sim::kAllSubtasks[k]));
-    if (e.meta.role != role)
-      throw_invalid_argument("--experts[" + std::to_string(k) + "]", "a " + role + " checkpoint",
-                             "role " + e.meta.role);
-    out.push_back(std::make_unique<rl::LearnedExpert>(
-        rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
-        e.meta.learn_gripper));
+    out.push_back(rl::learned_expert_from(rl::load_expert(nn::read_file(entries[k])),
+                                          sim::subtask_name(sim::kAllSubtasks[k]),
+                                          "--experts[" + std::to_string(k) + "]"));
   }
   return out;
 }

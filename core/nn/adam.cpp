@@ -28,21 +28,31 @@ Adam::Adam(std::size_t parameter_count, AdamConfig config)
 }
 
 void Adam::step(std::span<float> params, std::span<const float> grads) {
-  if (params.size() != m_.size() || grads.size() != m_.size()) {
-    throw_internal("Adam::step: parameter count differs from the optimiser's");
-  }
+  begin_step();
+  apply(params, grads, 0, m_.size());
+}
+
+void Adam::begin_step() {
   ++t_;
-  const auto n = static_cast<Eigen::Index>(m_.size());
-  Eigen::Map<Eigen::ArrayXf> p(params.data(), n), m(m_.data(), n), v(v_.data(), n);
-  Eigen::Map<const Eigen::ArrayXf> g(grads.data(), n);
+  const double c1 = 1.0 - std::pow(config_.beta1, static_cast<double>(t_));
+  const double c2 = 1.0 - std::pow(config_.beta2, static_cast<double>(t_));
+  step_size_ = static_cast<float>(config_.learning_rate * std::sqrt(c2) / c1);
+  epsilon_ = static_cast<float>(config_.epsilon * std::sqrt(c2));
+}
+
+void Adam::apply(std::span<float> params, std::span<const float> grads, std::size_t begin,
+                 std::size_t count) {
+  if (params.size() != m_.size() || grads.size() != m_.size() || begin + count > m_.size()) {
+    throw_internal("Adam::apply: parameter count differs from the optimiser's");
+  }
+  const auto n = static_cast<Eigen::Index>(count);
+  Eigen::Map<Eigen::ArrayXf> p(params.data() + begin, n), m(m_.data() + begin, n),
+      v(v_.data() + begin, n);
+  Eigen::Map<const Eigen::ArrayXf> g(grads.data() + begin, n);
   const auto b1 = static_cast<float>(config_.beta1), b2 = static_cast<float>(config_.beta2);
   m = b1 * m + (1.0f - b1) * g;
   v = b2 * v + (1.0f - b2) * g.square();
-  const double c1 = 1.0 - std::pow(config_.beta1, static_cast<double>(t_));
-  const double c2 = 1.0 - std::pow(config_.beta2, static_cast<double>(t_));
-  const auto step_size = static_cast<float>(config_.learning_rate * std::sqrt(c2) / c1);
-  const auto eps = static_cast<float>(config_.epsilon * std::sqrt(c2));
-  p -= step_size * m / (v.sqrt() + eps);
+  p -= step_size_ * m / (v.sqrt() + epsilon_);
 }
 
 void Adam::restore(std::span<const float> m, std::span<const float> v, std::int64_t t) {

@@ -10,6 +10,9 @@
 
 namespace pnp::nn {
 
+// Elements per 64 bytes: where a slice of a flat parameter buffer may begin (see apply()).
+inline constexpr std::size_t kSliceAlignment = 16;
+
 struct AdamConfig {
   double learning_rate = 1e-3;
   double beta1 = 0.9;
@@ -24,6 +27,13 @@ class Adam {
   Adam(std::size_t parameter_count, AdamConfig config);
 
   void step(std::span<float> params, std::span<const float> grads);
+  // step() in parts, for several threads: begin_step() once, then apply() on disjoint
+  // slices [begin, begin + count) of the parameters. Slices that begin at multiples of
+  // kSliceAlignment give exactly step()'s result (the vectorised and the scalar tail
+  // code round differently, so the split must not move elements between them).
+  void begin_step();
+  void apply(std::span<float> params, std::span<const float> grads, std::size_t begin,
+             std::size_t count);
   void set_learning_rate(double lr) { config_.learning_rate = lr; }
   const AdamConfig& config() const { return config_; }
   std::int64_t steps() const { return t_; }
@@ -37,6 +47,7 @@ class Adam {
   AdamConfig config_;
   std::vector<float, Eigen::aligned_allocator<float>> m_, v_;
   std::int64_t t_ = 0;
+  float step_size_ = 0, epsilon_ = 0;  // this step's, bias-corrected (begin_step)
 };
 
 }  // namespace pnp::nn

@@ -117,6 +117,16 @@ std::pair<Eigen::Index, Eigen::Index> columns(int p, Eigen::Index n) {
   return {begin, end - begin};
 }
 
+// Slice k of n parameters, for the element-wise steps (gradient sum, Adam, Polyak); slices
+// begin on nn::kSliceAlignment, so they give the unsplit step's exact result.
+std::pair<std::size_t, std::size_t> slice(std::size_t k, std::size_t n) {
+  const std::size_t parts = kUpdatePartitions, a = nn::kSliceAlignment;
+  const auto boundary = [&](std::size_t i) {
+    return i == parts ? n : std::min(n, n * i / parts / a * a);
+  };
+  return {boundary(k), boundary(k + 1) - boundary(k)};
+}
+
 }  // namespace
 
 void DdpgHerAgent::normalise_columns(const std::vector<float>& observations,
@@ -201,13 +211,27 @@ double DdpgHerAgent::bc_gradient(const SampledBatch& demos, Eigen::Index begin, 
   return squared_error;
 }
 
-void DdpgHerAgent::sum_gradients(nn::Mlp& net, bool actor) {
-  auto grads = net.grads();
+void DdpgHerAgent::sum_gradients(nn::Mlp& net, bool actor, std::size_t begin, std::size_t count) {
+  const auto grads = net.grads().subspan(begin, count);
   std::fill(grads.begin(), grads.end(), 0.0f);
   for (const Partition& p : parts_) {  // fixed order: the sum never depends on timing
-    const auto& g = actor ? p.actor_grads : p.critic_grads;
-    for (std::size_t k = 0; k < grads.size(); ++k) grads[k] += g[k];
+    const float* g = (actor ? p.actor_grads : p.critic_grads).data() + begin;
+    for (std::size_t k = 0; k < count; ++k) grads[k] += g[k];
   }
+}
+
+void DdpgHerAgent::step_networks(bool critic_too) {
+  actor_adam_.begin_step();
+  if (critic_too) critic_adam_.begin_step();
+  pool_.parallel_for(parts_.size(), [&](std::size_t k) {
+    const auto step = [&](nn::Mlp& net, nn::Adam& adam, bool actor) {
+      const auto [begin, count] = slice(k, net.params().size());
+      sum_gradients(net, actor, begin, count);
+      adam.apply(net.params(), net.grads(), begin, count);
+    };
+    if (critic_too) step(critic_, critic_adam_, false);
+    step(actor_, actor_adam_, true);
+  });
 }
 
 UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* demos) {
@@ -228,10 +252,7 @@ UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* 
           bc_gradient(*demos, begin, count, demo_n, static_cast<float>(config_.demo_bc_weight), p);
     }
   });
-  sum_gradients(critic_, false);
-  critic_adam_.step(critic_.params(), critic_.grads());
-  sum_gradients(actor_, true);
-  actor_adam_.step(actor_.params(), actor_.grads());
+  step_networks(true);
 
   UpdateStats stats;
   double q = 0, motion = 0, bc = 0;
@@ -256,16 +277,22 @@ double DdpgHerAgent::behaviour_clone(const SampledBatch& batch) {
     const auto [begin, count] = columns(static_cast<int>(k), n);
     p.bc_sq = bc_gradient(batch, begin, count, n, 1.0f, p);
   });
-  sum_gradients(actor_, true);
-  actor_adam_.step(actor_.params(), actor_.grads());
+  step_networks(false);
   double squared = 0;
   for (const Partition& p : parts_) squared += p.bc_sq;
   return squared / static_cast<double>(n * kAct);
 }
 
 void DdpgHerAgent::update_targets() {
-  nn::polyak_update(actor_target_.params(), actor_.params(), config_.polyak);
-  nn::polyak_update(critic_target_.params(), critic_.params(), config_.polyak);
+  pool_.parallel_for(parts_.size(), [&](std::size_t k) {
+    for (auto [target, online] :
+         {std::pair{&actor_target_, &actor_}, {&critic_target_, &critic_}}) {
+      const auto [begin, count] = slice(k, online->params().size());
+      nn::polyak_update(target->params().subspan(begin, count),
+                        std::span<const float>(online->params()).subspan(begin, count),
+                        config_.polyak);
+    }
+  });
 }
 
 }  // namespace pnp::rl

@@ -1,5 +1,6 @@
 #include "rl/learned_expert.h"
 
+#include "common/error.h"
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {
@@ -13,6 +14,18 @@ sim::Action LearnedExpert::act(sim::Subtask subtask, const sim::Observation& obs
 
 std::unique_ptr<sim::SubtaskPolicy> LearnedExpert::clone() const {
   return std::make_unique<LearnedExpert>(*this);
+}
+
+std::unique_ptr<LearnedExpert> learned_expert_from(const LoadedExpert& checkpoint,
+                                                   std::string_view role, std::string_view field) {
+  if (checkpoint.meta.role != role) {
+    throw_invalid_argument(std::string(field), "a checkpoint of role " + std::string(role),
+                           "role " + checkpoint.meta.role);
+  }
+  return std::make_unique<LearnedExpert>(
+      ActorSnapshot(checkpoint.actor, checkpoint.observation_normalizer, checkpoint.goal_normalizer,
+                    checkpoint.meta.clip_obs),
+      checkpoint.meta.learn_gripper);
 }
 
 }  // namespace pnp::rl

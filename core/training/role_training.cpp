@@ -22,12 +22,7 @@ std::string role_at(std::size_t k) {
 std::unique_ptr<sim::SubtaskPolicy> policy_from(const Blob& blob, const std::string& role,
                                                 const std::string& field) {
   if (blob.empty()) return std::make_unique<sim::ScriptedPolicy>();
-  rl::LoadedExpert e = rl::load_expert(blob);
-  if (e.meta.role != role)
-    throw_invalid_argument(field, "a " + role + " checkpoint", "role " + e.meta.role);
-  return std::make_unique<rl::LearnedExpert>(
-      rl::ActorSnapshot(e.actor, e.observation_normalizer, e.goal_normalizer, e.meta.clip_obs),
-      e.meta.learn_gripper);
+  return rl::learned_expert_from(rl::load_expert(blob), role, field);
 }
 
 rl::ExpertAlgorithm expert_algorithm(const TrainingSpec& spec) {

@@ -32,6 +32,26 @@ TEST(Adam, MinimisesAQuadratic) {
   EXPECT_NEAR(p[1], 1.0f, 1e-2);
 }
 
+TEST(Adam, AStepAppliedInSlicesEqualsOneStep) {
+  // Slices begin on the alignment; the length is not a multiple of it (a scalar tail).
+  const std::size_t n = 1001;
+  std::vector<float, Eigen::aligned_allocator<float>> whole(n), sliced(n), g(n);  // as Mlp's
+  for (std::size_t i = 0; i < n; ++i) {
+    whole[i] = sliced[i] = std::sin(static_cast<float>(i));
+    g[i] = std::cos(0.37f * static_cast<float>(i));
+  }
+  Adam one(n, {0.01}), parts(n, {0.01});
+  for (int step = 0; step < 3; ++step) {
+    one.step(whole, g);
+    parts.begin_step();
+    parts.apply(sliced, g, 0, 20 * kSliceAlignment);
+    parts.apply(sliced, g, 20 * kSliceAlignment, kSliceAlignment);
+    parts.apply(sliced, g, 21 * kSliceAlignment, n - 21 * kSliceAlignment);
+  }
+  EXPECT_EQ(whole, sliced);
+  EXPECT_EQ(one.steps(), parts.steps());
+}
+
 TEST(Adam, RefusesInvalidHyperparameters) {
   try {
     Adam(3, {-1e-3});
