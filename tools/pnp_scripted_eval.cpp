@@ -123,13 +123,7 @@ pnp::sim::ScriptedEvalReport evaluate_experts(pnp::sim::Robot robot, pnp::sim::O
 void trace_episode(pnp::sim::Robot robot, pnp::sim::ObjectShape object, const std::string& list,
                    std::uint64_t seed, long long index) {
   using namespace pnp;
-  std::vector<std::unique_ptr<sim::SubtaskPolicy>> experts;
-  if (list.empty()) {
-    for (std::size_t k = 0; k < sim::kNumSubtasks; ++k)
-      experts.push_back(std::make_unique<sim::ScriptedPolicy>());
-  } else {
-    experts = load_experts(list);
-  }
+  const auto experts = load_experts(list.empty() ? "scripted,scripted,scripted" : list);
   const auto env = sim::LocalEnvFactory(sim::WorldModel::load(robot, object)).make();
   const std::uint64_t episode_seed = derive_seed(seed, static_cast<std::uint64_t>(index));
   std::printf(

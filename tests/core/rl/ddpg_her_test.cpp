@@ -19,6 +19,19 @@ std::string refusal(const DdpgHerConfig& c) {
   return "accepted";
 }
 
+TEST(DdpgHerConfig, OriginalBcPresetChangesOnlyTheNetworksAndSchedule) {
+  DdpgHerConfig base;
+  base.noise_eps = 0.1;
+  const DdpgHerConfig c = original_bc_config(base);
+  EXPECT_EQ(c.hidden, (std::vector<int>{128, 128}));
+  EXPECT_EQ(c.hidden_activation, nn::Activation::kELU);
+  EXPECT_DOUBLE_EQ(c.actor_learning_rate, 1e-4);
+  EXPECT_EQ(c.batch_size, 1);
+  EXPECT_DOUBLE_EQ(c.updates_per_transition, 1.0);
+  EXPECT_DOUBLE_EQ(c.noise_eps, 0.1) << "exploration stays the base's";
+  EXPECT_EQ(refusal(c), "accepted");
+}
+
 TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   DdpgHerConfig c;
   EXPECT_EQ(refusal(c), "accepted");
