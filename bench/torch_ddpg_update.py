@@ -6,19 +6,27 @@ project's inputs: 25 observation + 3 goal values, 4 actions), batch 256, Adam 1e
 target clamp to [-1/(1-gamma), 0], action L2 1.0, Polyak 0.95 after every update, as in
 pnp-bench-update. Prints one JSON object: updates per second at each thread setting and
 the best. Run by pnp-bench-update with Debian's python3-torch (OpenBLAS).
+
+Thread settings: PyTorch's own threads (torch.set_num_threads) and OpenBLAS's, which
+Debian's build uses for its matrix products and which PyTorch does not set; OpenBLAS reads
+its count once, at load, so each OpenBLAS setting runs in a child process.
 """
 import json
+import os
+import subprocess
 import sys
 import time
 
-import torch
-from torch import nn
+TORCH_THREADS = (1, 2)
+OPENBLAS_THREADS = (1, 2)
 
 OBS, GOAL, ACT, BATCH, HIDDEN = 25, 3, 4, 256, 256
 GAMMA, POLYAK, L2 = 0.98, 0.95, 1.0
 
 
 def mlp(inputs, outputs, tanh):
+    from torch import nn
+
     layers = [nn.Linear(inputs, HIDDEN), nn.ReLU(), nn.Linear(HIDDEN, HIDDEN), nn.ReLU(),
               nn.Linear(HIDDEN, HIDDEN), nn.ReLU(), nn.Linear(HIDDEN, outputs)]
     if tanh:
@@ -27,6 +35,7 @@ def mlp(inputs, outputs, tanh):
 
 
 def run(updates, threads):
+    import torch
     torch.set_num_threads(threads)
     torch.manual_seed(1)
     actor, critic = mlp(OBS + GOAL, ACT, True), mlp(OBS + GOAL + ACT, 1, False)
@@ -72,12 +81,30 @@ def run(updates, threads):
     return updates / (time.perf_counter() - start)
 
 
+def child(updates):
+    """Runs every PyTorch thread setting under this process's OpenBLAS setting."""
+    import torch
+    print(json.dumps({"torch_version": torch.__version__,
+                      "by_torch_threads": {str(t): run(updates, t) for t in TORCH_THREADS}}))
+
+
 def main():
     updates = int(sys.argv[1]) if len(sys.argv) > 1 else 200
-    per_threads = {str(t): run(updates, t) for t in (1, 2)}
-    best = max(per_threads, key=per_threads.get)
-    print(json.dumps({"torch_version": torch.__version__, "updates_per_s_by_threads": per_threads,
-                      "best_threads": int(best), "updates_per_s": per_threads[best]}))
+    if len(sys.argv) > 2 and sys.argv[2] == "--child":
+        child(updates)
+        return
+    by_setting, version = {}, None
+    for blas in OPENBLAS_THREADS:
+        env = dict(os.environ, OPENBLAS_NUM_THREADS=str(blas))
+        out = subprocess.run([sys.executable, __file__, str(updates), "--child"], env=env,
+                             check=True, capture_output=True, text=True).stdout
+        result = json.loads(out.strip().splitlines()[-1])
+        version = result["torch_version"]
+        for threads, ups in result["by_torch_threads"].items():
+            by_setting[f"torch_threads={threads},openblas_threads={blas}"] = ups
+    best = max(by_setting, key=by_setting.get)
+    print(json.dumps({"torch_version": version, "updates_per_s_by_setting": by_setting,
+                      "best_setting": best, "updates_per_s": by_setting[best]}))
 
 
 if __name__ == "__main__":

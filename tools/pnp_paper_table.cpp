@@ -62,7 +62,10 @@ int main(int argc, char** argv) {
                  "DDPG+HER and BC gradient steps per stored transition (0: the original's 40 "
                  "per cycle)")
       ->capture_default_str();
-  double expert_target = 0.95;
+  // Experts stop above the hierarchy's 95%: the stop rule on 100 episodes accepts experts
+  // a little below their target, and a hierarchy is no better than its weakest expert
+  // (measured: at 0.95, one seed's hierarchy scored 0.938 held out; at 0.97, 0.993).
+  double expert_target = 0.97;
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")
       ->capture_default_str();

@@ -26,39 +26,36 @@ Activation parse_activation(std::string_view name, std::string_view field) {
   return parse_enum<Activation>(name, kAll, &activation_name, field);
 }
 
-void apply_activation(Activation a, const Matrix& z, Matrix& out) {
-  ensure_shape(out, z.rows(), z.cols());
+void apply_activation(Activation a, Matrix& z) {
   switch (a) {
     case Activation::kNone:
-      out = z;
       break;
     case Activation::kReLU:
-      out = z.cwiseMax(0.0f);
+      z = z.cwiseMax(0.0f);
       break;
     case Activation::kTanh:
-      out = z.array().tanh();
+      z = z.array().tanh();
       break;
     case Activation::kELU:
-      out = (z.array() > 0.0f).select(z.array(), z.array().exp() - 1.0f);
+      z = (z.array() > 0.0f).select(z.array(), z.array().exp() - 1.0f);
       break;
   }
 }
 
-void activation_backward(Activation a, const Matrix& z, const Matrix& out, const Matrix& dout,
-                         Matrix& dz) {
+void activation_backward(Activation a, const Matrix& out, const Matrix& dout, Matrix& dz) {
   ensure_shape(dz, dout.rows(), dout.cols());
   switch (a) {
     case Activation::kNone:
       dz = dout;
       break;
     case Activation::kReLU:
-      dz = (z.array() > 0.0f).select(dout.array(), 0.0f);
+      dz = (out.array() > 0.0f).select(dout.array(), 0.0f);
       break;
     case Activation::kTanh:
       dz = dout.array() * (1.0f - out.array().square());
       break;
     case Activation::kELU:
-      dz = (z.array() > 0.0f).select(dout.array(), dout.array() * (out.array() + 1.0f));
+      dz = (out.array() > 0.0f).select(dout.array(), dout.array() * (out.array() + 1.0f));
       break;
   }
 }

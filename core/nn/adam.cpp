@@ -1,6 +1,8 @@
 #include "nn/adam.h"
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -42,17 +44,40 @@ void Adam::begin_step() {
 
 void Adam::apply(std::span<float> params, std::span<const float> grads, std::size_t begin,
                  std::size_t count) {
-  if (params.size() != m_.size() || grads.size() != m_.size() || begin + count > m_.size()) {
+  const std::array<std::span<const float>, 1> one{grads};
+  apply(params, one, begin, count);
+}
+
+void Adam::apply(std::span<float> params, std::span<const std::span<const float>> partials,
+                 std::size_t begin, std::size_t count) {
+  if (params.size() != m_.size() || begin + count > m_.size() || partials.empty()) {
     throw_internal("Adam::apply: parameter count differs from the optimiser's");
   }
-  const auto n = static_cast<Eigen::Index>(count);
-  Eigen::Map<Eigen::ArrayXf> p(params.data() + begin, n), m(m_.data() + begin, n),
-      v(v_.data() + begin, n);
-  Eigen::Map<const Eigen::ArrayXf> g(grads.data() + begin, n);
+  for (const auto& g : partials) {
+    if (g.size() != m_.size()) throw_internal("Adam::apply: gradient size differs");
+  }
   const auto b1 = static_cast<float>(config_.beta1), b2 = static_cast<float>(config_.beta2);
-  m = b1 * m + (1.0f - b1) * g;
-  v = b2 * v + (1.0f - b2) * g.square();
-  p -= step_size_ * m / (v.sqrt() + epsilon_);
+  // Chunks small enough that the gradient, moments and parameters stay in L1 across the
+  // three passes; a multiple of kSliceAlignment, so the vectorised loops and the scalar
+  // tail cover the same elements as one pass over the slice would.
+  constexpr std::size_t kChunk = 32 * kSliceAlignment;
+  alignas(64) std::array<float, kChunk> sum;
+  for (std::size_t at = begin; at < begin + count; at += kChunk) {
+    const auto n = static_cast<Eigen::Index>(std::min(kChunk, begin + count - at));
+    const float* g_data = partials[0].data() + at;
+    if (partials.size() > 1) {
+      Eigen::Map<Eigen::ArrayXf> acc(sum.data(), n);
+      acc = Eigen::Map<const Eigen::ArrayXf>(g_data, n);
+      for (std::size_t k = 1; k < partials.size(); ++k)
+        acc += Eigen::Map<const Eigen::ArrayXf>(partials[k].data() + at, n);
+      g_data = sum.data();
+    }
+    Eigen::Map<Eigen::ArrayXf> p(params.data() + at, n), m(m_.data() + at, n), v(v_.data() + at, n);
+    Eigen::Map<const Eigen::ArrayXf> g(g_data, n);
+    m = b1 * m + (1.0f - b1) * g;
+    v = b2 * v + (1.0f - b2) * g.square();
+    p -= step_size_ * m / (v.sqrt() + epsilon_);
+  }
 }
 
 void Adam::restore(std::span<const float> m, std::span<const float> v, std::int64_t t) {

@@ -34,6 +34,11 @@ class Adam {
   void begin_step();
   void apply(std::span<float> params, std::span<const float> grads, std::size_t begin,
              std::size_t count);
+  // The same with the gradient given as the sum, in order, of `partials` (each the full
+  // parameter count): several threads' gradients of one batch, summed on the fly in a fixed
+  // order, so the result does not depend on timing and the sum is never written out.
+  void apply(std::span<float> params, std::span<const std::span<const float>> partials,
+             std::size_t begin, std::size_t count);
   void set_learning_rate(double lr) { config_.learning_rate = lr; }
   const AdamConfig& config() const { return config_; }
   std::int64_t steps() const { return t_; }

@@ -95,19 +95,22 @@ const Matrix& Mlp::forward(const MatrixRef& x, MlpWorkspace& ws) const {
                            std::to_string(x.rows()));
   }
   const auto n = layers_.size();
-  ws.pre.resize(n);
   ws.post.resize(n);
   ensure_shape(ws.input, x.rows(), x.cols());
   ws.input = x;
   const Matrix* a = &ws.input;
   for (std::size_t l = 0; l < n; ++l) {
-    Matrix& z = ws.pre[l];
+    Matrix& z = ws.post[l];
     const Layer& layer = layers_[l];
+    // The product accumulates onto the broadcast bias: one pass over z instead of a
+    // zeroing pass and a bias pass.
+    ensure_shape(z, layer.out, a->cols());
+    const ConstVectorMap b = bias(static_cast<int>(l));
+    for (Eigen::Index c = 0; c < z.cols(); ++c) z.col(c) = b;  // vectorised, unlike colwise()
     gemm(false, false, 1.0f, params_.data() + layer.weight_offset, layer.out, layer.in, a->data(),
-         a->rows(), a->cols(), 0.0f, z);
-    z.colwise() += bias(static_cast<int>(l));
-    apply_activation(layers_[l].activation, z, ws.post[l]);
-    a = &ws.post[l];
+         a->rows(), a->cols(), 1.0f, z);
+    apply_activation(layer.activation, z);
+    a = &z;
   }
   return ws.post.back();
 }
@@ -126,7 +129,7 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
   ensure_shape(*upstream, dy.rows(), dy.cols());
   *upstream = dy;
   for (std::size_t l = n; l-- > 0;) {
-    activation_backward(layers_[l].activation, ws.pre[l], ws.post[l], *upstream, ws.grad_z);
+    activation_backward(layers_[l].activation, ws.post[l], *upstream, ws.grad_z);
     const Matrix& input = l == 0 ? ws.input : ws.post[l - 1];
     const Layer& layer = layers_[l];
     const float* w = params_.data() + layer.weight_offset;

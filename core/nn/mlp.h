@@ -27,8 +27,7 @@ struct MlpSpec {
 
 struct MlpWorkspace {
   Matrix input;
-  std::vector<Matrix> pre;   // z_l = W_l a_{l-1} + b_l
-  std::vector<Matrix> post;  // a_l = f(z_l)
+  std::vector<Matrix> post;  // a_l = f(W_l a_{l-1} + b_l)
   std::vector<Matrix> grad;  // scratch for dL/da and dL/dz
   Matrix grad_z;
 };

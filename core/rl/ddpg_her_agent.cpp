@@ -1,6 +1,7 @@
 #include "rl/ddpg_her_agent.h"
 
 #include <algorithm>
+#include <array>
 
 #include "nn/flat_ops.h"
 
@@ -211,23 +212,17 @@ double DdpgHerAgent::bc_gradient(const SampledBatch& demos, Eigen::Index begin, 
   return squared_error;
 }
 
-void DdpgHerAgent::sum_gradients(nn::Mlp& net, bool actor, std::size_t begin, std::size_t count) {
-  const auto grads = net.grads().subspan(begin, count);
-  std::fill(grads.begin(), grads.end(), 0.0f);
-  for (const Partition& p : parts_) {  // fixed order: the sum never depends on timing
-    const float* g = (actor ? p.actor_grads : p.critic_grads).data() + begin;
-    for (std::size_t k = 0; k < count; ++k) grads[k] += g[k];
-  }
-}
-
 void DdpgHerAgent::step_networks(bool critic_too) {
   actor_adam_.begin_step();
   if (critic_too) critic_adam_.begin_step();
   pool_.parallel_for(parts_.size(), [&](std::size_t k) {
     const auto step = [&](nn::Mlp& net, nn::Adam& adam, bool actor) {
+      // The partitions' gradients, summed by Adam in partition order: never by timing.
+      std::array<std::span<const float>, kUpdatePartitions> partials;
+      for (std::size_t i = 0; i < parts_.size(); ++i)
+        partials[i] = actor ? parts_[i].actor_grads : parts_[i].critic_grads;
       const auto [begin, count] = slice(k, net.params().size());
-      sum_gradients(net, actor, begin, count);
-      adam.apply(net.params(), net.grads(), begin, count);
+      adam.apply(net.params(), partials, begin, count);
     };
     if (critic_too) step(critic_, critic_adam_, false);
     step(actor_, actor_adam_, true);

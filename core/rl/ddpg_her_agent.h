@@ -106,9 +106,6 @@ class DdpgHerAgent {
   // `total` samples) to p.actor_grads; returns that part's squared-error sum.
   double bc_gradient(const SampledBatch& demos, Eigen::Index begin, Eigen::Index count,
                      Eigen::Index total, float weight, Partition& p) const;
-  // Sums the partitions' gradients of parameters [begin, begin + count) in a fixed order
-  // into `net`'s gradient buffer.
-  void sum_gradients(nn::Mlp& net, bool actor, std::size_t begin, std::size_t count);
   // Sums the partitions' gradients and takes the Adam step of the actor (and the critic),
   // each thread on its own slice of the parameters: element-wise, so the result does not
   // depend on the split.

@@ -13,13 +13,14 @@ double loss(Mlp& net, const Matrix& x, const Matrix& w) {
   return static_cast<double>((net.forward(x, ws).array() * w.array()).sum());
 }
 
-// Signs of every pre-activation: a finite difference is only valid if no unit crosses
-// a ReLU kink between the two evaluations.
+// Signs of every pre-activation (those of the activations: f(z) > 0 exactly when z > 0):
+// a finite difference is only valid if no unit crosses a ReLU kink between the two
+// evaluations.
 std::vector<bool> pattern(Mlp& net, const Matrix& x) {
   MlpWorkspace ws;
   net.forward(x, ws);
   std::vector<bool> signs;
-  for (const Matrix& z : ws.pre) {
+  for (const Matrix& z : ws.post) {
     for (Eigen::Index i = 0; i < z.size(); ++i) signs.push_back(z.data()[i] > 0);
   }
   return signs;

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "common/error.h"
@@ -50,6 +52,27 @@ TEST(Adam, AStepAppliedInSlicesEqualsOneStep) {
   }
   EXPECT_EQ(whole, sliced);
   EXPECT_EQ(one.steps(), parts.steps());
+}
+
+TEST(Adam, PartialGradientsAreSummedInOrderBeforeTheStep) {
+  // Longer than Adam's internal chunk, with a scalar tail.
+  const std::size_t n = 1500;
+  std::vector<float, Eigen::aligned_allocator<float>> summed(n), partial(n), g0(n), g1(n), g(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    summed[i] = partial[i] = std::sin(static_cast<float>(i));
+    g0[i] = std::cos(0.37f * static_cast<float>(i));
+    g1[i] = 0.5f * std::sin(1.3f * static_cast<float>(i));
+    g[i] = g0[i] + g1[i];
+  }
+  Adam one(n, {0.01}), parts(n, {0.01});
+  const std::array<std::span<const float>, 2> partials{g0, g1};
+  for (int step = 0; step < 3; ++step) {
+    one.step(summed, g);
+    parts.begin_step();
+    parts.apply(partial, partials, 0, 40 * kSliceAlignment);
+    parts.apply(partial, partials, 40 * kSliceAlignment, n - 40 * kSliceAlignment);
+  }
+  EXPECT_EQ(summed, partial);  // bit for bit
 }
 
 TEST(Adam, RefusesInvalidHyperparameters) {
