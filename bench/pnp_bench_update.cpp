@@ -1,8 +1,8 @@
 // pnp-bench-update: DDPG+HER gradient updates per second (batch 256, 3 x 256 actor and
-// critic, Adam, Polyak), with the same update in PyTorch on the CPU run in the same
-// invocation as the peer (bench/torch_ddpg_update.py, Debian's python3-torch on
-// OpenBLAS, best of 1 and 2 threads), and the fraction of this machine's measured
-// single-thread GEMM peak the update reaches.
+// critic, Adam, Polyak) at 1 and 2 update threads, with the same update in PyTorch on
+// the CPU run in the same invocation as the peer (bench/torch_ddpg_update.py, Debian's
+// python3-torch on OpenBLAS, best of 1 and 2 PyTorch threads x 1 and 2 OpenBLAS threads),
+// and the fraction of this machine's measured GEMM peak the update reaches.
 
 #include <algorithm>
 #include <array>
