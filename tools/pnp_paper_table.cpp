@@ -69,6 +69,9 @@ int main(int argc, char** argv) {
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")
       ->capture_default_str();
+  bool fresh_eval_scenes = false;
+  app.add_flag("--fresh-eval-scenes", fresh_eval_scenes,
+               "new evaluation scenes at every evaluation (default: the same ones)");
   app.add_option("--threads", s.threads, "worker threads (0: all cores)");
   app.add_option("--out", out_dir, "where RESULTS.md and results/ go")->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
@@ -89,6 +92,8 @@ int main(int argc, char** argv) {
     s.expert_stop = {expert_max_steps, expert_target, 1000, 100, 2};
     s.hlc_stop = {hlc_max_steps, 0.95, 1000, 100, 2};
     s.e2e_stop = {e2e_max_steps, 0.95, 10'000, 100, 2};
+    for (rl::StopRule* rule : {&s.expert_stop, &s.hlc_stop, &s.e2e_stop})
+      rule->fresh_eval_scenes = fresh_eval_scenes;
     require_positive(bc_original_eval_interval, "--bc-original-eval-interval");
     tools::ExperimentSettings bc_original = s;
     bc_original.ddpg = rl::original_bc_config(s.ddpg);

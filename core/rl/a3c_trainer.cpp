@@ -282,7 +282,10 @@ HlcTrainingOutput train_choreographer(
           const auto eval_start = Clock::now();
           CurvePoint point;
           const ChoreographerEvaluation evaluation = evaluate_choreographer(
-              envs, *shared, experts, config.stop.eval_episodes, eval_stream, eval_pool);
+              envs, *shared, experts, config.stop.eval_episodes,
+              evaluation_round_seed(eval_stream, config.stop.fresh_eval_scenes,
+                                    result.curve.size()),
+              eval_pool);
           result.eval_env_steps += evaluation.env_steps;
           point.task_success = point.subtask_success = evaluation.success_rate;
           point.sampled_success = static_cast<double>(sampled_successes) /

@@ -220,13 +220,15 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     }
     if (result.train_env_steps < next_eval) continue;
 
-    // Evaluation on the fixed, fresh evaluation episodes.
+    // Evaluation on fresh, seeded episodes training never sees.
     const auto eval_start = Clock::now();
+    const std::uint64_t eval_seed =
+        evaluation_round_seed(eval_stream, config.stop.fresh_eval_scenes, result.curve.size());
     const LearnedExpert learned(agent->snapshot(), config.ddpg.learn_gripper);
     CurvePoint point;
     if (end_to_end) {
       const EndToEndReport report =
-          evaluate_end_to_end(envs, learned, config.stop.eval_episodes, eval_stream, pool);
+          evaluate_end_to_end(envs, learned, config.stop.eval_episodes, eval_seed, pool);
       result.eval_env_steps += report.env_steps;
       point.task_success = point.subtask_success = report.success_rate;
     } else {
@@ -239,7 +241,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
       }
       experts[static_cast<std::size_t>(config.subtask)] = &learned;
       const auto report =
-          sim::evaluate_pipeline(envs, experts, config.stop.eval_episodes, eval_stream, pool);
+          sim::evaluate_pipeline(envs, experts, config.stop.eval_episodes, eval_seed, pool);
       result.eval_env_steps += report.env_steps;
       point.task_success = report.success_rate;
       point.subtask_success = report.subtask_success_rate[static_cast<std::size_t>(config.subtask)];

@@ -62,7 +62,8 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"target_success", s.stop.target_success},
             {"eval_interval_steps", s.stop.eval_interval_steps},
             {"eval_episodes", s.stop.eval_episodes},
-            {"consecutive", s.stop.consecutive}}},
+            {"consecutive", s.stop.consecutive},
+            {"fresh_eval_scenes", s.stop.fresh_eval_scenes}}},
           {"scripted_gripper", s.scripted_gripper},
           {"ddpg",
            {{"hidden", d.hidden},
@@ -132,6 +133,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*stop, "eval_interval_steps", s.stop.eval_interval_steps, "stop.");
     read(*stop, "eval_episodes", s.stop.eval_episodes, "stop.");
     read(*stop, "consecutive", s.stop.consecutive, "stop.");
+    read(*stop, "fresh_eval_scenes", s.stop.fresh_eval_scenes, "stop.");
   }
   if (const auto ddpg = j.find("ddpg"); ddpg != j.end()) {
     rl::DdpgHerConfig& d = s.ddpg;

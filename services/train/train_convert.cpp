@@ -15,6 +15,7 @@ void read_stop(const train::v1::StopRule& in, rl::StopRule& out) {
   if (in.has_target_success()) out.target_success = in.target_success();
   if (in.has_eval_interval_steps()) out.eval_interval_steps = in.eval_interval_steps();
   if (in.has_eval_episodes()) out.eval_episodes = in.eval_episodes();
+  if (in.has_fresh_eval_scenes()) out.fresh_eval_scenes = in.fresh_eval_scenes();
 }
 
 void read_ddpg(const train::v1::DdpgHerConfig& in, training::TrainingSpec& spec) {

@@ -75,14 +75,16 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       "step counts, scripted prefixes and demonstrations included; evaluation episodes (fresh, "
       "seeded, never "
       "trained on) are not counted. Target for the whole task (choreographer, end-to-end): task "
-      "success >= {:.0f}% on {} evaluation episodes, "
+      "success >= {:.0f}% on {} evaluation episodes ({}), "
       "twice in a row "
       "(steps to target = training steps at the first of the two). Wall times are training time on "
       "this 2-core "
       "machine, evaluation excluded. Mean ± sample standard deviation over seeds.\n\n",
       c.command, c.code_commit, c.quick ? "quick" : "full", fmt::join(c.seeds, ", "),
       sim::robot_name(c.settings.robot), sim::object_name(c.settings.object),
-      100 * c.settings.hlc_stop.target_success, c.settings.hlc_stop.eval_episodes);
+      100 * c.settings.hlc_stop.target_success, c.settings.hlc_stop.eval_episodes,
+      c.settings.hlc_stop.fresh_eval_scenes ? "new scenes at every evaluation"
+                                            : "the same scenes at every evaluation");
   md += fmt::format(
       "Settings: each subtask expert trained after {} (docs/LEARNING.md), to {:.0f}% task "
       "success; DDPG+HER {} x {}, batch {}, {}; demonstrations {} episodes; choreographer A3C "

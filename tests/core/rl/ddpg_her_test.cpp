@@ -1,8 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "common/error.h"
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
+#include "rl/seed_streams.h"
 #include "rl/subtask_trainer.h"
 #include "rl/update_schedule.h"
 
@@ -221,6 +224,16 @@ TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
 
 namespace pnp::rl {
 namespace {
+
+TEST(EvaluationRoundSeed, TheSameScenesEveryRoundOrNewOnesForEach) {
+  const std::uint64_t stream = stream_seed(11, Stream::kEvaluation);
+  EXPECT_EQ(evaluation_round_seed(stream, false, 0), stream);
+  EXPECT_EQ(evaluation_round_seed(stream, false, 7), stream);
+  std::set<std::uint64_t> seen{stream, stream_seed(11, Stream::kTrainingEpisodes)};
+  for (std::size_t round = 0; round < 50; ++round)
+    EXPECT_TRUE(seen.insert(evaluation_round_seed(stream, true, round)).second) << round;
+  EXPECT_EQ(evaluation_round_seed(stream, true, 3), evaluation_round_seed(stream, true, 3));
+}
 
 TEST(UpdateSchedule, FixedPerCycleByDefault) {
   UpdateSchedule schedule{DdpgHerConfig{}};
