@@ -219,6 +219,43 @@ TEST(SubtaskTraining, SameSeedSameLearningCurveAtAnyThreadCount) {
                          b.agent->actor().params().begin()));
 }
 
+// The trainer plays the scenes the stop rule asks for: the same training run, evaluated
+// on new scenes, scores its first evaluation on other scenes (evaluation feeds no
+// learning, so training itself is unchanged).
+TEST(SubtaskTraining, FreshEvaluationScenesChangeTheEvaluationNotTheTraining) {
+  auto run = [](bool fresh) {
+    SubtaskTrainingConfig config;
+    config.subtask = sim::Subtask::kApproach;
+    config.seed = 4;
+    config.ddpg.hidden = {32};
+    config.ddpg.updates_per_cycle = 5;
+    config.ddpg.batch_size = 32;
+    config.ddpg.demo_episodes = 4;  // cloned demonstrations: an expert that reaches sometimes
+    config.ddpg.demo_pretrain_updates = 50;
+    config.stop.max_steps = 200;
+    config.stop.eval_interval_steps = 100;
+    config.stop.eval_episodes = 12;
+    config.stop.fresh_eval_scenes = fresh;
+    config.threads = 2;
+    return train_subtask_expert(
+        sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+        config);
+  };
+  const auto fixed = run(false), fresh = run(true);
+  ASSERT_EQ(fixed.result.curve.size(), fresh.result.curve.size());
+  ASSERT_GE(fixed.result.curve.size(), 2u);
+  for (std::size_t i = 0; i < fixed.result.curve.size(); ++i) {
+    EXPECT_EQ(fixed.result.curve[i].env_steps, fresh.result.curve[i].env_steps);
+    EXPECT_EQ(fixed.result.curve[i].critic_loss, fresh.result.curve[i].critic_loss);
+  }
+  const auto& a = fixed.result.curve.front();
+  const auto& b = fresh.result.curve.front();
+  EXPECT_TRUE(a.subtask_mean_steps != b.subtask_mean_steps ||
+              a.subtask_success != b.subtask_success || a.task_success != b.task_success)
+      << "the same scenes were evaluated: " << a.subtask_mean_steps << " " << a.subtask_success
+      << " " << a.task_success;
+}
+
 }  // namespace
 }  // namespace pnp::rl
 
