@@ -69,9 +69,9 @@ int main(int argc, char** argv) {
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")
       ->capture_default_str();
-  bool fresh_eval_scenes = false;
-  app.add_flag("--fresh-eval-scenes", fresh_eval_scenes,
-               "new evaluation scenes at every evaluation (default: the same ones)");
+  bool fresh_eval_scenes = true;
+  app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", fresh_eval_scenes,
+               "new evaluation scenes at every evaluation (default), or the same ones every time");
   app.add_option("--threads", s.threads, "worker threads (0: all cores)");
   app.add_option("--out", out_dir, "where RESULTS.md and results/ go")->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {

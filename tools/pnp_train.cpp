@@ -181,8 +181,8 @@ int main(int argc, char** argv) {
                  "training steps between evaluations")
       ->capture_default_str();
   app.add_option("--eval-episodes", o.spec.stop.eval_episodes)->capture_default_str();
-  app.add_flag("--fresh-eval-scenes", o.spec.stop.fresh_eval_scenes,
-               "new evaluation scenes at every evaluation (default: the same ones)");
+  app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", o.spec.stop.fresh_eval_scenes,
+               "new evaluation scenes at every evaluation (default), or the same ones every time");
   app.add_option("--out", o.out, "output directory for checkpoints")->capture_default_str();
   app.add_option("--init", o.init, "checkpoint to fine-tune from");
   app.add_option("--experts", o.experts, "hlc: approach,manipulate,retract checkpoints");

@@ -31,10 +31,10 @@ struct StopRule {
   long long eval_interval_steps = 1000;
   int eval_episodes = 100;
   int consecutive = 2;
-  // false: every evaluation replays the same eval_episodes scenes (smooth curves, but a
-  // deterministic policy is then judged on one draw of scenes for the whole run); true:
-  // each evaluation round plays new scenes, so the estimate converges on the true rate.
-  bool fresh_eval_scenes = false;
+  // true: each evaluation round plays new scenes, so a deterministic policy is not judged
+  // on one draw of scenes for the whole run (one unlucky draw stalled 2 of 9 runs);
+  // false: every round replays the same eval_episodes scenes (smoother curves).
+  bool fresh_eval_scenes = true;
   void validate() const;
 };
 
