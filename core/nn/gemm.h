@@ -1,22 +1,37 @@
 #pragma once
-// C = alpha op(A) op(B) + beta C for column-major float matrices. Batched products (the
-// DDPG update's 128-column partitions) go to OpenBLAS pinned to one thread, about 1.8x
-// Eigen's own kernel here; narrow ones (one sample when acting) stay in Eigen, which is
-// faster at that size; a single sample through a wide layer is a matrix-vector product
-// (SGEMV). The update's two partitions call OpenBLAS from two threads at
-// once; the reproducibility tests cover that.
+// C = alpha op(A) op(B) + beta C for column-major float matrices. Batched products with
+// a full register panel of rows (the DDPG update's layers) go to the unpacked AVX-512
+// kernel (nn/direct_gemm.h), bit-identical to OpenBLAS and ~25% faster over the update
+// because nothing is packed; the rest go to OpenBLAS pinned to one thread (about 1.8x
+// Eigen's own kernel here); narrow ones (one sample when acting) stay in Eigen, which is
+// faster at that size, and a single sample through a wide layer is a matrix-vector
+// product (SGEMV). The update's two partitions call these from two threads at once; the
+// reproducibility tests cover that.
 
 #include "nn/tensor.h"
 
 namespace pnp::nn {
 
 inline constexpr Eigen::Index kBlasMinColumns = 16;
+// Products with A as stored and at least this many rows use the unpacked kernel
+// (nn/direct_gemm.h) when the build has it.
+inline constexpr Eigen::Index kDirectMinRows = 32;
 
 // dst = alpha * op(a) * op(b) + beta * dst; dst must already have the result's shape
 // when beta != 0. `a` and `b` are contiguous column-major storage.
 void gemm(bool transpose_a, bool transpose_b, float alpha, const float* a, Eigen::Index a_rows,
           Eigen::Index a_cols, const float* b, Eigen::Index b_rows, Eigen::Index b_cols, float beta,
           Matrix& dst);
+
+// dst = W x + bias (added to every column), then max(dst, 0) if relu: a dense layer.
+// W is m x k and x is k x n, both contiguous column-major.
+void gemm_bias(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& x, const float* bias,
+               bool relu, Matrix& dst);
+
+// dst = W^T dz, the input gradient of a dense layer whose W is m x k. For the unpacked
+// kernel W^T is first copied into `scratch` (a copy is cheaper than OpenBLAS's packing).
+void gemm_input_gradient(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& dz,
+                         Matrix& scratch, Matrix& dst);
 
 // dst(m x n, column-major, contiguous) += op(a) * op(b), through OpenBLAS: accumulates a
 // batched product straight into a gradient buffer.

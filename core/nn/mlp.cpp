@@ -102,14 +102,10 @@ const Matrix& Mlp::forward(const MatrixRef& x, MlpWorkspace& ws) const {
   for (std::size_t l = 0; l < n; ++l) {
     Matrix& z = ws.post[l];
     const Layer& layer = layers_[l];
-    // The product accumulates onto the broadcast bias: one pass over z instead of a
-    // zeroing pass and a bias pass.
-    ensure_shape(z, layer.out, a->cols());
-    const ConstVectorMap b = bias(static_cast<int>(l));
-    for (Eigen::Index c = 0; c < z.cols(); ++c) z.col(c) = b;  // vectorised, unlike colwise()
-    gemm(false, false, 1.0f, params_.data() + layer.weight_offset, layer.out, layer.in, a->data(),
-         a->rows(), a->cols(), 1.0f, z);
-    apply_activation(layer.activation, z);
+    const bool relu = layer.activation == Activation::kReLU;  // fused into the product
+    gemm_bias(params_.data() + layer.weight_offset, layer.out, layer.in, *a,
+              params_.data() + layer.bias_offset, relu, z);
+    if (!relu) apply_activation(layer.activation, z);
     a = &z;
   }
   return ws.post.back();
@@ -142,8 +138,7 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
     }
     Matrix* target = l == 0 ? dx : (upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0]);
     if (target) {
-      gemm(true, false, 1.0f, w, layer.out, layer.in, ws.grad_z.data(), ws.grad_z.rows(),
-           ws.grad_z.cols(), 0.0f, *target);
+      gemm_input_gradient(w, layer.out, layer.in, ws.grad_z, ws.weight_t, *target);
     }
     if (l != 0) upstream = target;
   }

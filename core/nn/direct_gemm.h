@@ -1,0 +1,41 @@
+#pragma once
+// Matrix products whose left operand is used as stored (column-major, not transposed),
+// computed straight from the operands with no packing. OpenBLAS copies both operands into
+// packed panels on every call, ~13% of the DDPG update; here A's 32-row panels are read
+// in place (contiguous down each column) and B's elements are broadcast from where they
+// lie, so the only memory traffic is the operands themselves.
+//
+// Each output element is one sequential fused multiply-add chain over k from zero, then
+// added to C once: the same arithmetic as OpenBLAS's kernel for k within one of its
+// blocks, so swapping one for the other leaves results bit-identical (pinned by a test).
+
+#include <cstddef>
+
+namespace pnp::nn {
+
+// True when this build has the kernel (AVX-512); otherwise callers use OpenBLAS.
+bool direct_gemm_available();
+
+struct DirectGemmOperands {
+  std::ptrdiff_t m = 0, n = 0, k = 0;
+  const float* a = nullptr;  // m x k, column-major, leading dimension m
+  // B(p, j) is b[p * b_row_stride + j * b_col_stride]: (1, k) for a column-major k x n
+  // matrix, (n, 1) for the transpose of a column-major n x k one.
+  const float* b = nullptr;
+  std::ptrdiff_t b_row_stride = 1, b_col_stride = 0;
+  float* c = nullptr;       // m x n, column-major, leading dimension m
+  bool accumulate = false;  // C += A B instead of C = A B
+  // C = A B + bias, the m-vector added to every column (instead of accumulate).
+  const float* row_bias = nullptr;
+  bool relu = false;  // then C = max(C, 0)
+};
+
+// Requires direct_gemm_available().
+void direct_gemm(const DirectGemmOperands& op);
+
+// dst (cols x rows) = src (rows x cols)^T, both contiguous column-major, 16 x 16 tiles
+// transposed in registers: the kernel's A for a product with a transposed left operand.
+// Requires direct_gemm_available().
+void direct_transpose(const float* src, std::ptrdiff_t rows, std::ptrdiff_t cols, float* dst);
+
+}  // namespace pnp::nn
