@@ -36,6 +36,7 @@ struct Epilogue {
   bool accumulate;
   __m512 bias_low, bias_high;  // zero when there is no bias
   bool relu;
+  const float* relu_output;  // at this block's first element, leading dimension ldc
 };
 
 // C[32 x Cols] (+)= A[32 x k] B[k x Cols]: every accumulator stays in a register.
@@ -72,6 +73,13 @@ void block(std::ptrdiff_t k, const float* a, std::ptrdiff_t lda, const float* b,
       low[j] = _mm512_max_ps(low[j], zero);
       high[j] = _mm512_max_ps(high[j], zero);
     }
+    if (e.relu_output) {
+      const float* out = e.relu_output + static_cast<std::ptrdiff_t>(j) * ldc;
+      const __m512 out_low = _mm512_maskz_loadu_ps(e.rows.low, out);
+      const __m512 out_high = _mm512_maskz_loadu_ps(e.rows.high, out + 16);
+      low[j] = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(out_low, zero, _CMP_GT_OQ), low[j]);
+      high[j] = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(out_high, zero, _CMP_GT_OQ), high[j]);
+    }
     _mm512_mask_storeu_ps(cj, e.rows.low, low[j]);
     _mm512_mask_storeu_ps(cj + 16, e.rows.high, high[j]);
   }
@@ -87,7 +95,8 @@ void column_block(const DirectGemmOperands& op, std::ptrdiff_t j) {
                .accumulate = op.accumulate,
                .bias_low = _mm512_setzero_ps(),
                .bias_high = _mm512_setzero_ps(),
-               .relu = op.relu};
+               .relu = op.relu,
+               .relu_output = op.relu_output ? op.relu_output + j * op.m + i : nullptr};
     if (op.row_bias) {
       e.bias_low = _mm512_maskz_loadu_ps(e.rows.low, op.row_bias + i);
       e.bias_high = _mm512_maskz_loadu_ps(e.rows.high, op.row_bias + i + 16);

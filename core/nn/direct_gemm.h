@@ -28,6 +28,9 @@ struct DirectGemmOperands {
   // C = A B + bias, the m-vector added to every column (instead of accumulate).
   const float* row_bias = nullptr;
   bool relu = false;  // then C = max(C, 0)
+  // Then C = C where relu_output > 0, else 0 (m x n like C): the ReLU derivative of the
+  // layer whose output this is, applied as the input gradient is stored.
+  const float* relu_output = nullptr;
 };
 
 // Requires direct_gemm_available().

@@ -89,17 +89,23 @@ void gemm_bias(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& x, 
 }
 
 void gemm_input_gradient(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& dz,
-                         Matrix& scratch, Matrix& dst) {
+                         const Matrix* relu_output, Matrix& scratch, Matrix& dst) {
   if (dz.rows() != m) throw_internal("gemm_input_gradient: inner dimensions differ");
   const Eigen::Index n = dz.cols();
+  if (relu_output && (relu_output->rows() != k || relu_output->cols() != n))
+    throw_internal("gemm_input_gradient: ReLU output of the wrong shape");
   if (!use_direct(false, k, n)) {
     gemm(true, false, 1.0f, w, m, k, dz.data(), m, n, 0.0f, dst);
+    if (relu_output) dst = (relu_output->array() > 0.0f).select(dst.array(), 0.0f);
     return;
   }
   ensure_shape(scratch, k, m);
   direct_transpose(w, m, k, scratch.data());
   ensure_shape(dst, k, n);
-  direct_gemm(direct_operands(k, n, m, scratch.data(), false, dz.data(), m, dst.data(), false));
+  DirectGemmOperands op =
+      direct_operands(k, n, m, scratch.data(), false, dz.data(), m, dst.data(), false);
+  op.relu_output = relu_output ? relu_output->data() : nullptr;
+  direct_gemm(op);
 }
 
 void gemm_accumulate(bool ta, bool tb, const float* a, Eigen::Index a_rows, Eigen::Index a_cols,

@@ -28,10 +28,12 @@ void gemm(bool transpose_a, bool transpose_b, float alpha, const float* a, Eigen
 void gemm_bias(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& x, const float* bias,
                bool relu, Matrix& dst);
 
-// dst = W^T dz, the input gradient of a dense layer whose W is m x k. For the unpacked
-// kernel W^T is first copied into `scratch` (a copy is cheaper than OpenBLAS's packing).
+// dst = W^T dz, the input gradient of a dense layer whose W is m x k; with relu_output
+// (k x n, the layer below's ReLU output), times that ReLU's derivative, so dst is the layer
+// below's dL/dz. For the unpacked kernel W^T is first copied into `scratch` (a copy is
+// cheaper than OpenBLAS's packing).
 void gemm_input_gradient(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& dz,
-                         Matrix& scratch, Matrix& dst);
+                         const Matrix* relu_output, Matrix& scratch, Matrix& dst);
 
 // dst(m x n, column-major, contiguous) += op(a) * op(b), through OpenBLAS: accumulates a
 // batched product straight into a gradient buffer.

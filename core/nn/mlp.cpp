@@ -124,23 +124,36 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
   Matrix* upstream = &ws.grad[0];
   ensure_shape(*upstream, dy.rows(), dy.cols());
   *upstream = dy;
+  // Whether upstream is already dL/dz: the product of the layer above fused this layer's
+  // ReLU derivative into its store, saving a pass over the batch.
+  bool upstream_is_grad_z = false;
   for (std::size_t l = n; l-- > 0;) {
-    activation_backward(layers_[l].activation, ws.post[l], *upstream, ws.grad_z);
+    const Matrix* grad_z = upstream;
+    if (!upstream_is_grad_z) {
+      activation_backward(layers_[l].activation, ws.post[l], *upstream, ws.grad_z);
+      grad_z = &ws.grad_z;
+    }
     const Matrix& input = l == 0 ? ws.input : ws.post[l - 1];
     const Layer& layer = layers_[l];
     const float* w = params_.data() + layer.weight_offset;
     if (!grads_out.empty()) {
       // Column-major: the first wc samples are the leading wc columns of both.
-      gemm_accumulate(false, true, ws.grad_z.data(), ws.grad_z.rows(), wc, input.data(),
-                      input.rows(), wc, grads_out.data() + layer.weight_offset);
+      gemm_accumulate(false, true, grad_z->data(), grad_z->rows(), wc, input.data(), input.rows(),
+                      wc, grads_out.data() + layer.weight_offset);
       VectorMap(grads_out.data() + layer.bias_offset, layer.out) +=
-          ws.grad_z.leftCols(wc).rowwise().sum();
+          grad_z->leftCols(wc).rowwise().sum();
     }
+    // Never the buffer grad_z is in.
     Matrix* target = l == 0 ? dx : (upstream == &ws.grad[0] ? &ws.grad[1] : &ws.grad[0]);
+    const bool fuse_relu = l != 0 && layers_[l - 1].activation == Activation::kReLU;
     if (target) {
-      gemm_input_gradient(w, layer.out, layer.in, ws.grad_z, ws.weight_t, *target);
+      gemm_input_gradient(w, layer.out, layer.in, *grad_z, fuse_relu ? &ws.post[l - 1] : nullptr,
+                          ws.weight_t, *target);
     }
-    if (l != 0) upstream = target;
+    if (l != 0) {
+      upstream = target;
+      upstream_is_grad_z = fuse_relu;
+    }
   }
 }
 

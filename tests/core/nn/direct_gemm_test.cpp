@@ -32,6 +32,7 @@ std::vector<float> reference(const DirectGemmOperands& op, std::vector<float> c)
       float& out = c[static_cast<std::size_t>(i + j * op.m)];
       out = op.accumulate ? out + acc : op.row_bias ? op.row_bias[i] + acc : acc;
       if (op.relu) out = std::max(out, 0.0f);
+      if (op.relu_output && !(op.relu_output[i + j * op.m] > 0.0f)) out = 0.0f;
     }
   }
   return c;
@@ -83,6 +84,22 @@ TEST(DirectGemm, AddsTheBiasToEveryColumnThenAppliesReLU) {
     EXPECT_EQ(0, std::memcmp(c.data(), expected.data(), c.size() * sizeof(float)));
     EXPECT_GT(std::count(c.begin(), c.end(), 0.0f), 0);  // ReLU clipped some
   }
+}
+
+TEST(DirectGemm, KeepsOnlyWhereTheReLUOutputIsPositive) {
+  if (!direct_gemm_available()) GTEST_SKIP() << "no AVX-512 kernel in this build";
+  const Shape s{256, 37, 256, false, false};
+  const auto a = random_floats(static_cast<std::size_t>(s.m * s.k), 11);
+  const auto b = random_floats(static_cast<std::size_t>(s.k * s.n), 12);
+  auto relu_output = random_floats(static_cast<std::size_t>(s.m * s.n), 13);
+  for (float& x : relu_output) x = std::max(x, 0.0f);  // a ReLU's output: half exactly 0
+  std::vector<float> c(relu_output.size(), 5.0f);
+  DirectGemmOperands op = operands(s, a, b, c);
+  op.relu_output = relu_output.data();
+  const auto expected = reference(op, c);
+  direct_gemm(op);
+  EXPECT_EQ(0, std::memcmp(c.data(), expected.data(), c.size() * sizeof(float)));
+  EXPECT_GT(std::count(c.begin(), c.end(), 0.0f), static_cast<long>(c.size() / 4));
 }
 
 TEST(DirectGemm, TransposesWholeAndPartialTiles) {
