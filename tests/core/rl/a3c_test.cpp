@@ -44,6 +44,39 @@ TEST(A3c, ReproducibleForAGivenSeedAndWorkerCount) {
   EXPECT_EQ(a.result.train_env_steps, a.result.curve.back().env_steps + 2 * 50);
 }
 
+// Same design as the subtask trainer's test: the scene mode changes what the evaluations
+// see, never the training (which draws nothing from the evaluation stream).
+TEST(A3c, FreshEvaluationScenesChangeTheEvaluationNotTheTraining) {
+  auto run = [](bool fresh) {
+    HlcTrainingConfig config;
+    config.seed = 5;
+    config.a3c.workers = 2;
+    config.a3c.network = {{32, 32}, 8};
+    config.stop.max_steps = 1500;
+    config.stop.eval_interval_steps = 500;
+    config.stop.eval_episodes = 16;
+    config.stop.target_success = 1.0;
+    config.stop.fresh_eval_scenes = fresh;
+    config.eval_threads = 2;
+    const sim::ScriptedPolicy scripted;
+    return train_choreographer(
+        sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+        {&scripted, &scripted, &scripted}, config);
+  };
+  const auto fixed = run(false), fresh = run(true);
+  ASSERT_EQ(fixed.result.curve.size(), fresh.result.curve.size());
+  ASSERT_GE(fixed.result.curve.size(), 2u);
+  bool evaluation_differs = false;
+  for (std::size_t i = 0; i < fixed.result.curve.size(); ++i) {
+    const auto& a = fixed.result.curve[i];
+    const auto& b = fresh.result.curve[i];
+    EXPECT_EQ(a.env_steps, b.env_steps);
+    EXPECT_EQ(a.sampled_success, b.sampled_success) << "training episodes differ";
+    evaluation_differs |= a.task_success != b.task_success || a.detail != b.detail;
+  }
+  EXPECT_TRUE(evaluation_differs) << "both runs evaluated the same scenes";
+}
+
 TEST(A3c, RefusesInvalidConfiguration) {
   A3cConfig c;
   c.workers = 0;
