@@ -30,7 +30,7 @@ RowMasks row_masks(std::ptrdiff_t rows) {
   return {mask(rows), mask(std::max<std::ptrdiff_t>(0, rows - 16))};
 }
 
-// C[32 x Cols] (+)= A[32 x k] B[k x Cols]: every accumulator stays in a register.
+// What happens to a block's sums as they are stored.
 struct Epilogue {
   RowMasks rows;
   bool accumulate;
@@ -69,9 +69,9 @@ void block(std::ptrdiff_t k, const float* a, std::ptrdiff_t lda, const float* b,
     }
     low[j] = _mm512_add_ps(add_low, low[j]);
     high[j] = _mm512_add_ps(add_high, high[j]);
-    if (e.relu) {
-      low[j] = _mm512_max_ps(low[j], zero);
-      high[j] = _mm512_max_ps(high[j], zero);
+    if (e.relu) {  // max_ps returns its second operand for NaN: NaN stays NaN, as in Eigen
+      low[j] = _mm512_max_ps(zero, low[j]);
+      high[j] = _mm512_max_ps(zero, high[j]);
     }
     if (e.relu_output) {
       const float* out = e.relu_output + static_cast<std::ptrdiff_t>(j) * ldc;

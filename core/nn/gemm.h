@@ -13,7 +13,8 @@
 namespace pnp::nn {
 
 inline constexpr Eigen::Index kBlasMinColumns = 16;
-// Products with A as stored and at least this many rows use the unpacked kernel
+// Products with A as stored (W^T is transposed into scratch first), at least this many
+// rows, at least kBlasMinColumns columns, alpha 1 and beta 0 or 1 use the unpacked kernel
 // (nn/direct_gemm.h) when the build has it.
 inline constexpr Eigen::Index kDirectMinRows = 32;
 
@@ -35,8 +36,8 @@ void gemm_bias(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& x, 
 void gemm_input_gradient(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& dz,
                          const Matrix* relu_output, Matrix& scratch, Matrix& dst);
 
-// dst(m x n, column-major, contiguous) += op(a) * op(b), through OpenBLAS: accumulates a
-// batched product straight into a gradient buffer.
+// dst(m x n, column-major, contiguous) += op(a) * op(b): accumulates a batched product
+// straight into a gradient buffer (the unpacked kernel, or OpenBLAS).
 void gemm_accumulate(bool transpose_a, bool transpose_b, const float* a, Eigen::Index a_rows,
                      Eigen::Index a_cols, const float* b, Eigen::Index b_rows, Eigen::Index b_cols,
                      float* dst);

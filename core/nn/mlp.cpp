@@ -121,6 +121,7 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
   const Eigen::Index wc = weight_columns < 0 ? dy.cols() : weight_columns;
   if (wc > dy.cols()) throw_internal("Mlp::backward_into: more weight columns than samples");
   ws.grad.resize(2);
+  ws.weight_t.resize(n);  // one per layer: a shared one would reallocate at every layer
   Matrix* upstream = &ws.grad[0];
   ensure_shape(*upstream, dy.rows(), dy.cols());
   *upstream = dy;
@@ -148,7 +149,7 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
     const bool fuse_relu = l != 0 && layers_[l - 1].activation == Activation::kReLU;
     if (target) {
       gemm_input_gradient(w, layer.out, layer.in, *grad_z, fuse_relu ? &ws.post[l - 1] : nullptr,
-                          ws.weight_t, *target);
+                          ws.weight_t[l], *target);
     }
     if (l != 0) {
       upstream = target;

@@ -30,7 +30,7 @@ struct MlpWorkspace {
   std::vector<Matrix> post;  // a_l = f(W_l a_{l-1} + b_l)
   std::vector<Matrix> grad;  // scratch for dL/da and dL/dz
   Matrix grad_z;
-  Matrix weight_t;  // a layer's W^T, for the input gradient's product
+  std::vector<Matrix> weight_t;  // each layer's W^T, for the input gradient's product
 };
 
 class Mlp {

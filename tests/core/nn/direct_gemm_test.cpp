@@ -6,9 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
+
+#include "common/rng.h"
+#include "nn/mlp.h"
 
 namespace pnp::nn {
 namespace {
@@ -84,6 +88,19 @@ TEST(DirectGemm, AddsTheBiasToEveryColumnThenAppliesReLU) {
     EXPECT_EQ(0, std::memcmp(c.data(), expected.data(), c.size() * sizeof(float)));
     EXPECT_GT(std::count(c.begin(), c.end(), 0.0f), 0);  // ReLU clipped some
   }
+  // A NaN stays NaN through the ReLU (as in Eigen's cwiseMax(0)): a diverged network must
+  // not look finite.
+  const Shape s{32, 16, 4, false, false};
+  auto a = random_floats(static_cast<std::size_t>(s.m * s.k), 14);
+  a[0] = std::numeric_limits<float>::quiet_NaN();
+  const auto b = random_floats(static_cast<std::size_t>(s.k * s.n), 15);
+  const std::vector<float> bias(static_cast<std::size_t>(s.m), 0.0f);
+  std::vector<float> c(static_cast<std::size_t>(s.m * s.n), 0.0f);
+  DirectGemmOperands op = operands(s, a, b, c);
+  op.row_bias = bias.data();
+  op.relu = true;
+  direct_gemm(op);
+  EXPECT_TRUE(std::isnan(c[0]));
 }
 
 TEST(DirectGemm, KeepsOnlyWhereTheReLUOutputIsPositive) {
@@ -139,6 +156,70 @@ TEST(DirectGemm, UpdateShapesMatchOpenBlasBitForBit) {
     EXPECT_EQ(0, std::memcmp(ours.data(), blas.data(), ours.size() * sizeof(float)))
         << s.m << "x" << s.n << "x" << s.k;
   }
+}
+
+// The critic's pass in the DDPG update (35 inputs, 3 x 256 ReLU, batch 256, parameter
+// gradients from the first 128 samples) through Mlp, with the bias, ReLU and ReLU
+// derivative fused into the kernel, against the same pass done step by step with OpenBLAS.
+TEST(DirectGemm, AWholeNetworkMatchesTheUnfusedOpenBlasPassBitForBit) {
+  Rng rng(21);
+  Mlp net({35, {256, 256, 256}, 1, Activation::kReLU, Activation::kNone});
+  net.initialise(rng);
+  const Eigen::Index n = 256, wc = 128;
+  Matrix x(35, n), dy(1, n);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x.data()[i] = static_cast<float>(rng.normal());
+  for (Eigen::Index i = 0; i < dy.size(); ++i) dy.data()[i] = static_cast<float>(rng.normal());
+
+  MlpWorkspace ws;
+  const Matrix y = net.forward(x, ws);
+  AlignedFloats grads(net.params().size(), 0.0f);
+  Matrix dx;
+  net.backward_into(ws, dy, grads, &dx, wc);
+
+  const int layers = net.layers();
+  const auto offset = [&](const float* p) { return p - net.params().data(); };
+  std::vector<Matrix> post(static_cast<std::size_t>(layers));
+  const Matrix* in = &x;
+  for (int l = 0; l < layers; ++l) {
+    const auto w = net.weight(l);
+    Matrix& z = post[static_cast<std::size_t>(l)];
+    z = net.bias(l).replicate(1, n);
+    cblas_sgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, static_cast<blasint>(w.rows()),
+                static_cast<blasint>(n), static_cast<blasint>(w.cols()), 1.0f, w.data(),
+                static_cast<blasint>(w.rows()), in->data(), static_cast<blasint>(w.cols()), 1.0f,
+                z.data(), static_cast<blasint>(w.rows()));
+    if (l + 1 < layers) z = z.cwiseMax(0.0f);
+    in = &z;
+  }
+  AlignedFloats expected_grads(grads.size(), 0.0f);
+  Matrix upstream = dy, grad_z, expected_dx;
+  for (int l = layers; l-- > 0;) {
+    const auto& out = post[static_cast<std::size_t>(l)];
+    grad_z =
+        l + 1 < layers ? Matrix((out.array() > 0.0f).select(upstream.array(), 0.0f)) : upstream;
+    const Matrix& input = l == 0 ? x : post[static_cast<std::size_t>(l - 1)];
+    const auto w = net.weight(l);
+    cblas_sgemm(CblasColMajor, CblasNoTrans, CblasTrans, static_cast<blasint>(w.rows()),
+                static_cast<blasint>(w.cols()), static_cast<blasint>(wc), 1.0f, grad_z.data(),
+                static_cast<blasint>(w.rows()), input.data(), static_cast<blasint>(w.cols()), 1.0f,
+                expected_grads.data() + offset(w.data()), static_cast<blasint>(w.rows()));
+    VectorMap(expected_grads.data() + offset(net.bias(l).data()), w.rows()) +=
+        grad_z.leftCols(wc).rowwise().sum();
+    Matrix& next = l == 0 ? expected_dx : upstream;
+    Matrix product(w.cols(), n);
+    cblas_sgemm(CblasColMajor, CblasTrans, CblasNoTrans, static_cast<blasint>(w.cols()),
+                static_cast<blasint>(n), static_cast<blasint>(w.rows()), 1.0f, w.data(),
+                static_cast<blasint>(w.rows()), grad_z.data(), static_cast<blasint>(w.rows()), 0.0f,
+                product.data(), static_cast<blasint>(w.cols()));
+    next = product;
+  }
+  ASSERT_EQ(y.size(), post.back().size());
+  EXPECT_EQ(0, std::memcmp(y.data(), post.back().data(),
+                           sizeof(float) * static_cast<std::size_t>(y.size())));
+  EXPECT_EQ(0, std::memcmp(grads.data(), expected_grads.data(), sizeof(float) * grads.size()));
+  ASSERT_EQ(dx.size(), expected_dx.size());
+  EXPECT_EQ(0, std::memcmp(dx.data(), expected_dx.data(),
+                           sizeof(float) * static_cast<std::size_t>(dx.size())));
 }
 
 }  // namespace

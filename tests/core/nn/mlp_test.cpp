@@ -105,6 +105,28 @@ TEST(Mlp, SteadyBatchDoesNotReallocate) {
   EXPECT_EQ(ws.post[0].data(), before);
 }
 
+// Wide enough for the unpacked kernel, whose input gradient transposes each W into the
+// workspace: one buffer per layer, so a steady batch allocates nothing after the first.
+TEST(Mlp, SteadyBatchBackwardDoesNotReallocate) {
+  Rng rng(2);
+  Mlp net({35, {64, 64}, 1});
+  net.initialise(rng);
+  MlpWorkspace ws;
+  const Matrix x = Matrix::Random(35, 32), dy = Matrix::Random(1, 32);
+  AlignedFloats grads(net.params().size(), 0.0f);
+  Matrix dx;
+  const auto pass = [&] {
+    net.forward(x, ws);
+    net.backward_into(ws, dy, grads, &dx);
+    std::vector<const float*> buffers{dx.data(), ws.grad_z.data()};
+    for (const Matrix& m : ws.weight_t) buffers.push_back(m.data());
+    for (const Matrix& m : ws.grad) buffers.push_back(m.data());
+    return buffers;
+  };
+  const auto first = pass();
+  EXPECT_EQ(pass(), first);
+}
+
 // One pass over [A | B] with weight_columns = |A|: parameter gradients of A alone, input
 // gradients of both (the DDPG update's merged critic pass).
 TEST(Mlp, WeightColumnsLimitParameterGradientsButNotInputGradients) {
