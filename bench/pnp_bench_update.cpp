@@ -2,7 +2,8 @@
 // critic, Adam, Polyak) at 1 and 2 update threads, with the same update in PyTorch on
 // the CPU run in the same invocation as the peer (bench/torch_ddpg_update.py, Debian's
 // python3-torch on OpenBLAS, best of 1 and 2 PyTorch threads x 1 and 2 OpenBLAS threads),
-// and the fraction of this machine's measured GEMM peak the update reaches.
+// and the fraction of this machine's measured GEMM peak the update reaches. The GEMM path
+// (nn/gemm_path.h) is the process's: PNP_GEMM=avx512|avx2|openblas times one path.
 
 #include <algorithm>
 #include <array>
@@ -17,7 +18,9 @@
 
 #include "common/rng.h"
 #include "common/validate.h"
+#include "nn/cpu_features.h"
 #include "nn/gemm.h"
+#include "nn/gemm_path.h"
 #include "rl/ddpg_her_agent.h"
 #include "tools/common/cli.h"
 
@@ -64,7 +67,8 @@ double update_flops(const rl::DdpgHerConfig& c) {
   return 2.0 * macs * c.batch_size;
 }
 
-// The same GEMM path the update uses (single-threaded OpenBLAS), at the update's shape.
+// The same GEMM path the update uses (the process's kernel, or OpenBLAS on one thread), at
+// the update's shape.
 double gemm_peak_gflops() {
   nn::Matrix a = nn::Matrix::Random(256, 256), b = nn::Matrix::Random(256, 256), c(256, 256);
   double best = 1e300;
@@ -117,7 +121,8 @@ int main(int argc, char** argv) {
   return tools::run_tool(app, argc, argv, [&] {
     require_positive(updates, "--updates");
     require_positive(rounds, "--rounds");
-    rl::DdpgHerConfig config;  // batch 256, 3 x 256: the original's
+    const nn::GemmPath path = nn::active_gemm_path();  // refuses a bad PNP_GEMM first
+    rl::DdpgHerConfig config;                          // batch 256, 3 x 256: the original's
     // Ours at one and two update threads (the same weights either way), like the peer's
     // thread settings; the best is compared.
     constexpr std::array<std::size_t, 2> kThreads{1, rl::kUpdatePartitions};
@@ -161,6 +166,8 @@ int main(int argc, char** argv) {
     const double peak = gemm_peak_gflops();
     const double gflops = update_flops(config) * ups / 1e9;
     nlohmann::json out = {
+        {"gemm_path", nn::gemm_path_name(path)},
+        {"cpu_features", nn::describe(nn::detect_cpu_features())},
         {"updates_per_s", ups},
         {"ms_per_update", 1000.0 / ups},
         {"rounds", rounds},

@@ -12,6 +12,7 @@
 #include "build_info.h"
 #include "common/error.h"
 #include "common/validate.h"
+#include "nn/gemm_path.h"
 #include "tools/common/cli.h"
 #include "tools/common/progress_line.h"
 #include "tools/paper_table/report.h"
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
     context.command = "build/bin/pnp-paper-table";
     for (int i = 1; i < argc; ++i) context.command += std::string(" ") + argv[i];
     context.code_commit = kCodeCommit;
+    context.gemm_path = nn::gemm_path_name(nn::active_gemm_path());  // refuses a bad PNP_GEMM
     context.quick = quick;
     context.settings = s;
     context.bc_original_eval_interval = bc_original_eval_interval;

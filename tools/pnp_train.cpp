@@ -14,6 +14,7 @@
 #include "build_info.h"
 #include "common/error.h"
 #include "nn/checkpoint_io.h"
+#include "nn/gemm_path.h"
 #include "tools/common/cli.h"
 #include "tools/common/progress_line.h"
 #include "training/role_training.h"
@@ -150,6 +151,7 @@ nlohmann::json train(Options& o) {
   summary["object"] = o.object;
   summary["seed"] = o.spec.seed;
   summary["code_commit"] = kCodeCommit;
+  summary["gemm_path"] = nn::gemm_path_name(nn::active_gemm_path());
   summary["config"] = training::to_json(o.spec);
   summary["checkpoint"] = o.out + "/" + o.spec.role + ".ckpt";
   if (!o.init.empty()) summary["init"] = o.init;
@@ -203,6 +205,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
     o.spec.validate();
+    nn::active_gemm_path();  // a bad PNP_GEMM is refused before any work
     const nlohmann::json summary = train(o);
     std::cout << (o.json ? summary.dump() : summary.dump(2)) << "\n";
   });

@@ -1,21 +1,22 @@
 #pragma once
 // Matrix products whose left operand is used as stored (column-major, not transposed),
 // computed straight from the operands with no packing. OpenBLAS copies both operands into
-// packed panels on every call, ~13% of the DDPG update; here A's 32-row panels are read
-// in place (contiguous down each column) and B's elements are broadcast from where they
-// lie, so the only memory traffic is the operands themselves.
+// packed panels on every call, ~13% of the DDPG update; here A's register-high panels are
+// read in place (contiguous down each column) and B's elements are broadcast from where
+// they lie, so the only memory traffic is the operands themselves.
 //
 // Each output element is one sequential fused multiply-add chain over k from zero, then
-// added to C once: the same arithmetic as OpenBLAS's kernel for k within one of its
-// blocks, so swapping one for the other leaves results bit-identical (pinned by tests on
-// the update's products and on a whole network's forward and backward pass).
+// added to C (or to the bias, or to zero) once. That order is the project's definition,
+// pinned bit for bit against a scalar reference in the tests on every path, so the AVX-512
+// and AVX2 kernels give the same bits. It is also OpenBLAS's order in its SkylakeX kernel
+// for k within one of its blocks, so there the kernels equal OpenBLAS bit for bit; other
+// OpenBLAS kernels (Haswell, Zen) sum in another order and agree within rounding.
 
 #include <cstddef>
 
-namespace pnp::nn {
+#include "nn/gemm_path.h"
 
-// True when this build has the kernel (AVX-512); otherwise callers use OpenBLAS.
-bool direct_gemm_available();
+namespace pnp::nn {
 
 struct DirectGemmOperands {
   std::ptrdiff_t m = 0, n = 0, k = 0;
@@ -34,12 +35,16 @@ struct DirectGemmOperands {
   const float* relu_output = nullptr;
 };
 
-// Requires direct_gemm_available().
-void direct_gemm(const DirectGemmOperands& op);
+// True for the paths with an unpacked kernel (avx512, avx2); openblas has none.
+bool has_direct_kernel(GemmPath path);
 
-// dst (cols x rows) = src (rows x cols)^T, both contiguous column-major, 16 x 16 tiles
+// C (+)= A B on `path`'s kernel. The path must have a kernel this CPU can run.
+void direct_gemm(GemmPath path, const DirectGemmOperands& op);
+
+// dst (cols x rows) = src (rows x cols)^T, both contiguous column-major, square tiles
 // transposed in registers: the kernel's A for a product with a transposed left operand.
-// Requires direct_gemm_available().
-void direct_transpose(const float* src, std::ptrdiff_t rows, std::ptrdiff_t cols, float* dst);
+// The path must have a kernel this CPU can run.
+void direct_transpose(GemmPath path, const float* src, std::ptrdiff_t rows, std::ptrdiff_t cols,
+                      float* dst);
 
 }  // namespace pnp::nn

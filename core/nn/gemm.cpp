@@ -9,9 +9,11 @@ namespace pnp::nn {
 namespace {
 
 // Whether C (m x n) = op(A) op(B) goes to the unpacked kernel: A as stored, at least one
-// full register panel of rows, and a batch wide enough to be worth it.
+// full register panel of rows, a batch wide enough to be worth it, and a kernel on this
+// process's path.
 bool use_direct(bool transpose_a, Eigen::Index m, Eigen::Index n) {
-  return !transpose_a && m >= kDirectMinRows && n >= kBlasMinColumns && direct_gemm_available();
+  return !transpose_a && m >= kDirectMinRows && n >= kBlasMinColumns &&
+         has_direct_kernel(active_gemm_path());
 }
 
 DirectGemmOperands direct_operands(Eigen::Index m, Eigen::Index n, Eigen::Index k, const float* a,
@@ -36,7 +38,8 @@ void gemm(bool ta, bool tb, float alpha, const float* a, Eigen::Index a_rows, Ei
     throw_internal("gemm: accumulating into a matrix of the wrong shape");
   }
   if (use_direct(ta, m, n) && alpha == 1.0f && (beta == 0.0f || beta == 1.0f)) {
-    direct_gemm(direct_operands(m, n, k, a, tb, b, b_rows, dst.data(), beta == 1.0f));
+    direct_gemm(active_gemm_path(),
+                direct_operands(m, n, k, a, tb, b, b_rows, dst.data(), beta == 1.0f));
     return;
   }
   if (n == 1 && !tb && m >= kBlasMinColumns * 16) {
@@ -77,7 +80,7 @@ void gemm_bias(const float* w, Eigen::Index m, Eigen::Index k, const Matrix& x, 
     DirectGemmOperands op = direct_operands(m, n, k, w, false, x.data(), k, dst.data(), false);
     op.row_bias = bias;
     op.relu = relu;
-    direct_gemm(op);
+    direct_gemm(active_gemm_path(), op);
     return;
   }
   // The product accumulates onto the broadcast bias: one pass over dst instead of a
@@ -100,12 +103,12 @@ void gemm_input_gradient(const float* w, Eigen::Index m, Eigen::Index k, const M
     return;
   }
   ensure_shape(scratch, k, m);
-  direct_transpose(w, m, k, scratch.data());
+  direct_transpose(active_gemm_path(), w, m, k, scratch.data());
   ensure_shape(dst, k, n);
   DirectGemmOperands op =
       direct_operands(k, n, m, scratch.data(), false, dz.data(), m, dst.data(), false);
   op.relu_output = relu_output ? relu_output->data() : nullptr;
-  direct_gemm(op);
+  direct_gemm(active_gemm_path(), op);
 }
 
 void gemm_accumulate(bool ta, bool tb, const float* a, Eigen::Index a_rows, Eigen::Index a_cols,
@@ -114,7 +117,7 @@ void gemm_accumulate(bool ta, bool tb, const float* a, Eigen::Index a_rows, Eige
   const Eigen::Index kb = tb ? b_cols : b_rows, n = tb ? b_rows : b_cols;
   if (k != kb) throw_internal("gemm_accumulate: inner dimensions differ");
   if (use_direct(ta, m, n)) {
-    direct_gemm(direct_operands(m, n, k, a, tb, b, b_rows, dst, true));
+    direct_gemm(active_gemm_path(), direct_operands(m, n, k, a, tb, b, b_rows, dst, true));
     return;
   }
   cblas_sgemm(CblasColMajor, ta ? CblasTrans : CblasNoTrans, tb ? CblasTrans : CblasNoTrans,

@@ -1,8 +1,9 @@
 #pragma once
 // C = alpha op(A) op(B) + beta C for column-major float matrices. Batched products with
-// a full register panel of rows (the DDPG update's layers) go to the unpacked AVX-512
-// kernel (nn/direct_gemm.h), bit-identical to OpenBLAS and ~25% faster over the update
-// because nothing is packed; the rest go to OpenBLAS pinned to one thread (about 1.8x
+// a full register panel of rows (the DDPG update's layers) go to the unpacked kernel of
+// the process's GEMM path (nn/gemm_path.h: AVX-512 or AVX2, picked at run time), ~25%
+// faster over the update than OpenBLAS because nothing is packed; the rest, and every
+// product on the openblas path, go to OpenBLAS pinned to one thread (about 1.8x
 // Eigen's own kernel here); narrow ones (one sample when acting) stay in Eigen, which is
 // faster at that size, and a single sample through a wide layer is a matrix-vector
 // product (SGEMV). The update's two partitions call these from two threads at once; the
@@ -15,7 +16,7 @@ namespace pnp::nn {
 inline constexpr Eigen::Index kBlasMinColumns = 16;
 // Products with A as stored (W^T is transposed into scratch first), at least this many
 // rows, at least kBlasMinColumns columns, alpha 1 and beta 0 or 1 use the unpacked kernel
-// (nn/direct_gemm.h) when the build has it.
+// (nn/direct_gemm.h) when the process's path has one.
 inline constexpr Eigen::Index kDirectMinRows = 32;
 
 // dst = alpha * op(a) * op(b) + beta * dst; dst must already have the result's shape

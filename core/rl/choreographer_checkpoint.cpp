@@ -27,7 +27,8 @@ std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, Chor
                             {"train_env_steps", meta.train_env_steps},
                             {"eval_success", meta.eval_success},
                             {"seed", meta.seed},
-                            {"code_commit", meta.code_commit}};
+                            {"code_commit", meta.code_commit},
+                            {"gemm_path", meta.gemm_path}};
   nn::CheckpointWriter w;
   write_meta(w, j);
   const auto blocks = net.parameter_blocks();
@@ -49,6 +50,7 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     out.eval_success = m.at("eval_success");
     out.seed = m.at("seed");
     out.code_commit = m.value("code_commit", "");
+    out.gemm_path = m.value("gemm_path", "");
     return out;
   });
   if (meta.network.trunk.empty() || meta.network.lstm <= 0) {

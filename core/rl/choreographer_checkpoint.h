@@ -19,6 +19,7 @@ struct ChoreographerMeta {
   double eval_success = 0;
   std::uint64_t seed = 0;
   std::string code_commit;
+  std::string gemm_path{};  // nn/gemm_path.h: which products computed it ("" before kept)
 };
 
 struct LoadedChoreographer {

@@ -34,6 +34,7 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
       {"eval_success", meta.eval_success},
       {"seed", meta.seed},
       {"code_commit", meta.code_commit},
+      {"gemm_path", meta.gemm_path},
       {"has_critic", critic != nullptr}};
   nn::CheckpointWriter w;
   write_meta(w, j);
@@ -68,6 +69,7 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.eval_success = m.at("eval_success");
     out.seed = m.at("seed");
     out.code_commit = m.value("code_commit", "");
+    out.gemm_path = m.value("gemm_path", "");
     return out;
   });
   nn::Mlp actor({kPolicyInputs, meta.hidden, kAct, meta.hidden_activation, nn::Activation::kTanh});

@@ -29,6 +29,9 @@ struct RunSpec {
   std::string config_json = "{}";  // every hyperparameter, as the trainer received it
   std::string code_commit;
   std::optional<std::int64_t> parent_checkpoint_id;  // fine-tuning starts from it
+  // The GEMM path of the process that created the run (nn/gemm_path.h): runs on different
+  // paths give different, equally valid curves. Empty for runs from before it was kept.
+  std::string gemm_path{};
 };
 
 struct RunRecord {

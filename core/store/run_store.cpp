@@ -12,7 +12,7 @@ namespace {
 constexpr const char* kRunColumns =
     "id, role, algorithm, robot, object, seed, config_json, code_commit, parent_checkpoint_id, "
     "state, error, env_steps, last_success, reached, steps_to_target, created_ms, updated_ms, "
-    "finished_ms";
+    "finished_ms, gemm_path";
 
 RunRecord read_run(const Statement& st) {
   RunRecord r;
@@ -34,6 +34,7 @@ RunRecord read_run(const Statement& st) {
   r.created_ms = st.column_int(15);
   r.updated_ms = st.column_int(16);
   if (!st.is_null(17)) r.finished_ms = st.column_int(17);
+  r.spec.gemm_path = st.column_text(18);
   return r;
 }
 
@@ -81,8 +82,8 @@ RunRecord RunStore::create_run(const RunSpec& spec) {
   const Millis now = now_ms();
   auto st = db_.prepare(
       "INSERT INTO runs (role, algorithm, robot, object, seed, config_json, code_commit, "
-      "parent_checkpoint_id, state, created_ms, updated_ms) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?, ?)");
+      "parent_checkpoint_id, state, created_ms, updated_ms, gemm_path) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?, ?, ?)");
   st.bind(1, spec.role)
       .bind(2, spec.algorithm)
       .bind(3, spec.robot)
@@ -92,7 +93,8 @@ RunRecord RunStore::create_run(const RunSpec& spec) {
       .bind(7, spec.code_commit)
       .bind_optional(8, spec.parent_checkpoint_id)
       .bind(9, now)
-      .bind(10, now);
+      .bind(10, now)
+      .bind(11, spec.gemm_path);
   st.run();
   const std::int64_t id = db_.last_insert_id();
   tx.commit();

@@ -10,7 +10,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 1> kMigrations{
+constexpr std::array<std::string_view, 2> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -67,6 +67,10 @@ CREATE TABLE promotions (
   checkpoint_id INTEGER NOT NULL REFERENCES checkpoints(id),
   promoted_ms INTEGER NOT NULL
 );
+)sql",
+    // 2: the GEMM path a run was trained on.
+    R"sql(
+ALTER TABLE runs ADD COLUMN gemm_path TEXT NOT NULL DEFAULT '';
 )sql",
 };
 

@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "common/error.h"
+#include "nn/gemm_path.h"
 #include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
 #include "rl/learned_expert.h"
@@ -80,7 +81,8 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
                           steps,
                           success,
                           spec.seed,
-                          code_commit};
+                          code_commit,
+                          std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   };
   auto save = [&](const rl::DdpgHerAgent& agent, long long steps, double success) {
     return rl::save_expert(meta_at(steps, success), agent.actor(), &agent.critic(),
@@ -119,7 +121,8 @@ TrainingOutcome train_hlc(const TrainingSpec& spec, const TrainingInputs& inputs
                                  steps,
                                  success,
                                  spec.seed,
-                                 code_commit};
+                                 code_commit,
+                                 std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   };
   if (hooks.on_evaluation) {
     config.on_evaluation = [&](const rl::CurvePoint& p, rl::ChoreographerNet& net) {

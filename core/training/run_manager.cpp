@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "nn/gemm_path.h"
 #include "rl/choreographer_checkpoint.h"
 #include "rl/expert_checkpoint.h"
 #include "sim/subtask.h"
@@ -152,7 +153,8 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
                         spec.seed,
                         config_json(spec, refs),
                         options_.code_commit,
-                        refs.parent};
+                        refs.parent,
+                        std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   const store::RunRecord run = handler_store_.create_run(record);
   {
     std::lock_guard queue_lock(mutex_);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
+    // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
+    const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
     MetricsRegistry metrics;
     const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
     PolicyServiceImpl service(db, kind);
@@ -74,7 +77,7 @@ int main(int argc, char** argv) {
           }
         },
         std::chrono::milliseconds(reload_ms),
-        {{"db", db}, {"policy", policy}, {"ready", service.ready()}});
+        {{"db", db}, {"policy", policy}, {"ready", service.ready()}, {"gemm_path", gemm_path}});
   } catch (const pnp::Error& e) {
     log_event("inference", "fatal", {{"error", e.what()}});
     return 1;

@@ -14,6 +14,7 @@
 #include "build_info.h"
 #include "clients/sim_client/remote_env_factory.h"
 #include "common/error.h"
+#include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
 #include "services/train/training_service.h"
@@ -83,6 +84,8 @@ int main(int argc, char** argv) {
   if (address.empty()) address = "127.0.0.1:" + std::to_string(port->second);
   const std::string name = "train-" + role;
   try {
+    // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
+    const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
     MetricsRegistry metrics;
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {
@@ -100,9 +103,9 @@ int main(int argc, char** argv) {
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address});
     TrainingGauges gauges(metrics, role);
-    return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
-                                  std::chrono::milliseconds(1000),
-                                  {{"db", db}, {"role", role}, {"sim_addresses", sim_addresses}});
+    return serve_until_terminated(
+        runtime, name, [&] { gauges.update(manager.load()); }, std::chrono::milliseconds(1000),
+        {{"db", db}, {"role", role}, {"sim_addresses", sim_addresses}, {"gemm_path", gemm_path}});
   } catch (const pnp::Error& e) {
     log_event(name, "fatal", {{"error", e.what()}});
     return 1;

@@ -46,6 +46,7 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   out.set_state(to_proto(run.state));
   out.set_config_json(run.spec.config_json);
   out.set_code_commit(run.spec.code_commit);
+  out.set_gemm_path(run.spec.gemm_path);
   out.set_parent_checkpoint_id(run.spec.parent_checkpoint_id.value_or(0));
   out.set_env_steps(run.env_steps);
   out.set_max_steps(

@@ -12,6 +12,7 @@ namespace pnp::tools {
 struct ReportContext {
   std::string command;  // how to reproduce
   std::string code_commit;
+  std::string gemm_path;  // nn/gemm_path.h
   std::vector<std::uint64_t> seeds;
   bool quick = false;
   ExperimentSettings settings;

@@ -93,7 +93,7 @@ TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
 
 // The update's batch halves run on two threads or one; the weights must be identical.
 TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
-  DdpgHerConfig config;  // 3 x 256, batch 256: the OpenBLAS path
+  DdpgHerConfig config;  // 3 x 256, batch 256: the unpacked kernel on its paths
   Rng rng_a(9), rng_b(9), data(10);
   DdpgHerAgent one(config, rng_a, 1), two(config, rng_b, 2);
   SampledBatch batch;
