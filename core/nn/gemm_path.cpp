@@ -39,7 +39,7 @@ bool cpu_supports(GemmPath path, const CpuFeatures& cpu) {
 
 GemmPath resolve_gemm_path(std::string_view requested, const CpuFeatures& cpu) {
   if (requested.empty() || requested == "auto") {
-    for (const GemmPath p : kGemmPaths)
+    for (const GemmPath p : kAutoPreference)
       if (cpu_supports(p, cpu)) return p;
   }
   const std::optional<GemmPath> path = parse_gemm_path(requested);

@@ -62,12 +62,14 @@ DirectGemmOperands operands(const Shape& s, const std::vector<float>& a,
 TEST(DirectGemm, EveryElementIsOneFusedChainThenOneAddition) {
   FOR_EACH_KERNEL_PATH(path) {
     // Full and partial row panels of both kernels (16 and 32 rows), every column-block
-    // width of both (6 and 12), k = 0.
+    // width of both (6 and 12), k = 0, and k past the depth the AVX2 kernel copies A's
+    // panels for (512: deeper products read A in place).
     for (const Shape s :
          {Shape{256, 128, 256, false, true}, Shape{35, 13, 31, false, false},
           Shape{17, 25, 7, true, true}, Shape{64, 12, 0, false, true}, Shape{48, 1, 5, true, false},
           Shape{256, 35, 128, true, true}, Shape{9, 7, 3, false, true},
-          Shape{40, 11, 19, true, false}, Shape{8, 5, 2, false, false}}) {
+          Shape{40, 11, 19, true, false}, Shape{8, 5, 2, false, false},
+          Shape{40, 7, 600, false, true}, Shape{32, 13, 513, true, false}}) {
       const auto a = random_floats(static_cast<std::size_t>(s.m * s.k), 1);
       const auto b = random_floats(static_cast<std::size_t>(s.k * s.n), 2);
       auto c = random_floats(static_cast<std::size_t>(s.m * s.n), 3);
