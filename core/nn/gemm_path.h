@@ -26,7 +26,7 @@ enum class GemmPath { kAvx512, kAvx2, kOpenBlas };
 
 inline constexpr GemmPath kGemmPaths[] = {GemmPath::kAvx512, GemmPath::kAvx2, GemmPath::kOpenBlas};
 // What auto takes: the first the CPU supports. avx2 is not in it: on an AMD EPYC (Zen 3)
-// the update ran 105-110 updates/s on it against 129-136 on OpenBLAS's Zen kernel
+// the update ran 101-132 updates/s on it against 137-146 on OpenBLAS's Zen kernel
 // (docs/BENCHMARKS.md). It is a path to ask for: it reproduces the avx512 path's bits on
 // a CPU without AVX-512.
 inline constexpr GemmPath kAutoPreference[] = {GemmPath::kAvx512, GemmPath::kOpenBlas};

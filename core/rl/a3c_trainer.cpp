@@ -270,7 +270,7 @@ HlcTrainingOutput train_choreographer(
           double raw_input[sim::kObservationSize + sim::kGoalSize];
           for (int i = 0; i < sim::kObservationSize; ++i) raw_input[i] = o(i);
           for (int i = 0; i < sim::kGoalSize; ++i)
-            raw_input[sim::kObservationSize + i] = env->episode_goal()(i);
+            raw_input[sim::kObservationSize + i] = episode.goal(i);
           shared->normalizer().update(raw_input);
         }
         shared->normalizer().refresh();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/error.h"
 #include "sim/scripted_expert.h"
 
 namespace pnp::rl {
@@ -22,18 +23,18 @@ std::array<double, sim::kNumSubtasks> masked_softmax(
   return p;
 }
 
-namespace {
-
-int choose(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng) {
+int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng) {
   if (!sample) return static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());
   double u = rng.uniform();
   for (std::size_t k = 0; k < p.size(); ++k) {
     if ((u -= p[k]) < 0) return static_cast<int>(k);
   }
-  return static_cast<int>(p.size()) - 1;
+  // The probabilities sum to 1 only up to rounding, so u can outlast them: the last one
+  // that can be chosen, never a masked-out subtask.
+  for (std::size_t k = p.size(); k-- > 0;)
+    if (p[k] > 0) return static_cast<int>(k);
+  throw_internal("choose_subtask: no subtask has a positive probability");
 }
-
-}  // namespace
 
 std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state) {
   std::array<bool, sim::kNumSubtasks> out{};
@@ -52,6 +53,7 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            std::uint64_t episode_seed, bool sample, Rng& choice_rng) {
   HlcEpisode out;
   env.reset(episode_seed);
+  out.goal = env.episode_goal();
   net.reset_state();
   nn::Matrix input;
   sim::StepResult last;
@@ -63,7 +65,7 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);
     d.probabilities = masked_softmax(logits, available_subtasks(env.task_state()));
-    d.choice = choose(d.probabilities, sample, choice_rng);
+    d.choice = choose_subtask(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);
     for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {

@@ -30,6 +30,9 @@ struct HlcEpisode {
   std::vector<HlcDecision> decisions;
   std::vector<DecisionCache> caches;           // for back-propagation (training only)
   std::vector<sim::Observation> observations;  // the decision inputs, for the normaliser
+  // The goal they were made for: after a physics fault the environment has already begun
+  // the next episode, whose goal episode_goal() then returns.
+  sim::Goal goal = sim::Goal::Zero();
   bool success = false;
   int env_steps = 0;
 };
@@ -47,6 +50,10 @@ std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& sta
 std::array<double, sim::kNumSubtasks> masked_softmax(
     const std::array<double, sim::kNumSubtasks>& logits,
     const std::array<bool, sim::kNumSubtasks>& available);
+
+// A draw from `p` (masked_softmax's output) when sampling, else the most probable; never a
+// subtask of probability 0.
+int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng);
 
 // sample: draw choices from the policy (training); otherwise take the most probable.
 HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,

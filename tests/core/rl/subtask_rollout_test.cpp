@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <memory>
+#include <span>
+#include <utility>
+
 #include "rl/hlc_episode.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
@@ -29,6 +34,36 @@ class CountingPolicy final : public sim::SubtaskPolicy {
 std::shared_ptr<const sim::WorldModel> fetch_block() {
   return sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock);
 }
+
+// A PickPlaceEnv whose object's velocity blows up before step `fault_at`, as a contact
+// instability would: the environment reports the fault and has already begun a fresh
+// episode, with another goal.
+class FaultAtStep final : public sim::Environment {
+ public:
+  FaultAtStep(std::shared_ptr<const sim::WorldModel> world, int fault_at)
+      : env_(std::move(world)), fault_at_(fault_at) {}
+  using sim::Environment::step;
+  const sim::Observation& reset(std::uint64_t seed) override {
+    steps_ = 0;
+    return env_.reset(seed);
+  }
+  sim::StepResult step(std::span<const double> action, std::span<const double> goal,
+                       sim::Objective objective) override {
+    if (steps_++ == fault_at_)
+      env_.mj_data()->qvel[env_.world().ids().object_dof] =
+          std::numeric_limits<double>::quiet_NaN();
+    return env_.step(action, goal, objective);
+  }
+  const sim::Observation& observation() const override { return env_.observation(); }
+  const sim::Goal& episode_goal() const override { return env_.episode_goal(); }
+  sim::TaskState task_state() const override { return env_.task_state(); }
+  int elapsed_steps() const override { return env_.elapsed_steps(); }
+  bool needs_reset() const override { return env_.needs_reset(); }
+
+ private:
+  sim::PickPlaceEnv env_;
+  int fault_at_, steps_ = 0;
+};
 
 TEST(SubtaskRollout, ThePrefixPoliciesRunTheEarlierSubtasksAndAreCounted) {
   sim::PickPlaceEnv env(fetch_block());
@@ -86,6 +121,42 @@ TEST(HlcOptions, ASubtaskWhosePredicateHoldsCannotBeChosen) {
     if (r.objective_done) break;
   }
   EXPECT_EQ(available_subtasks(env.task_state()), (std::array<bool, 3>{false, true, true}));
+}
+
+// Probabilities that sum to a little under 1 (rounding) must not let a draw past them
+// pick a masked-out subtask (it picked the last, retract, whatever its mask).
+TEST(HlcOptions, ADrawPastTheRoundedSumNeverPicksAMaskedOutSubtask) {
+  Rng rng(5);
+  const std::array<double, 3> p{0.3, 0.3, 0.0};  // an extreme of rounding: u > 0.6 falls off
+  int second = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const int choice = choose_subtask(p, true, rng);
+    ASSERT_NE(choice, 2);
+    second += choice == 1 ? 1 : 0;
+  }
+  EXPECT_GT(second, 500);  // draws past the sum went to the last available subtask
+  EXPECT_EQ(choose_subtask({0.2, 0.7, 0.1}, false, rng), 1);
+}
+
+// The A3C normaliser learns from an episode's decision inputs with the episode's goal: the
+// episode keeps it, since after a fault the environment already holds the next one's.
+TEST(HlcEpisode, KeepsTheGoalItWasPlayedForAfterAFaultReset) {
+  const std::uint64_t seed = derive_seed(3, 0);
+  sim::PickPlaceEnv reference(fetch_block());
+  reference.reset(seed);
+  const sim::Goal goal = reference.episode_goal();
+
+  FaultAtStep env(fetch_block(), 5);
+  ChoreographerNet net({{16}, 4});
+  Rng init(1), choices(2);
+  net.initialise(init);
+  sim::ScriptedPolicy scripted;
+  const HlcEpisode episode =
+      run_hlc_episode(env, net, {&scripted, &scripted, &scripted}, seed, true, choices);
+  EXPECT_FALSE(episode.success);
+  EXPECT_EQ(episode.env_steps, 6);
+  EXPECT_EQ(episode.goal, goal);
+  EXPECT_NE(env.episode_goal(), goal) << "the environment moved on to a fresh episode";
 }
 
 TEST(HlcOptions, UnavailableSubtasksGetZeroProbabilityAndTheRestSumToOne) {
