@@ -26,14 +26,10 @@ void StopRule::validate() const {
 bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& result) {
   result.curve.push_back(point);
   result.final_success = point.task_success;
-  if (score >= rule_.target_success) {
-    if (streak_++ == 0) streak_start_ = point.env_steps;
-  } else {
-    streak_ = 0;
-  }
+  streak_ = score >= rule_.target_success ? streak_ + 1 : 0;
   if (streak_ >= rule_.consecutive) {
     result.reached = true;
-    result.steps_to_target = streak_start_;
+    result.steps_to_target = point.env_steps;  // the model that goes on
     return true;
   }
   return point.env_steps >= rule_.max_steps;

@@ -1,7 +1,10 @@
 #pragma once
 // The learning curve and the stopping rule shared by every trainer: evaluate at a fixed
 // interval of training environment steps; stop when two consecutive evaluations reach
-// the target (steps_to_target = the training steps at the first of them) or at the cap.
+// the target or at the cap. steps_to_target is the training steps at the last of them:
+// the model that stopped the run is the one passed on (the next expert's prefix, the
+// choreographer's experts, the held-out evaluation), so the steps reported are the steps
+// that model consumed.
 
 #include <functional>
 #include <stop_token>
@@ -39,8 +42,8 @@ struct StopRule {
 };
 
 struct TrainingResult;
-// Training wall time (evaluation excluded) until the first of the two evaluations that
-// reached the target, or until the run stopped if it never did.
+// Training wall time (evaluation excluded) until the evaluation that confirmed the target
+// (the model passed on), or until the run stopped if it never did.
 double wall_to_target(const TrainingResult& result);
 
 struct TrainingResult {
@@ -85,7 +88,6 @@ class StopTracker {
  private:
   StopRule rule_;
   int streak_ = 0;
-  long long streak_start_ = -1;
 };
 
 using ProgressCallback = std::function<void(const CurvePoint&)>;

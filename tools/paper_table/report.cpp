@@ -78,7 +78,8 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       "trained on) are not counted. Target for the whole task (choreographer, end-to-end): task "
       "success >= {:.0f}% on {} evaluation episodes ({}), "
       "twice in a row "
-      "(steps to target = training steps at the first of the two). Wall times are training time on "
+      "(steps to target = training steps at the second of the two: the model that goes on). Wall "
+      "times are training time on "
       "this 2-core "
       "machine, evaluation excluded. Mean ± sample standard deviation over seeds.\n\n",
       c.command, c.code_commit, c.gemm_path, c.quick ? "quick" : "full", fmt::join(c.seeds, ", "),

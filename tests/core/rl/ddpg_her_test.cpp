@@ -178,7 +178,26 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
   EXPECT_TRUE(out.result.reached) << "final success " << out.result.final_success;
   EXPECT_GE(out.result.curve.back().subtask_success, 0.9);
   EXPECT_GT(out.result.eval_env_steps, 0);
-  EXPECT_LE(out.result.steps_to_target, out.result.train_env_steps);
+  // The steps reported are the steps of the model that goes on, not of an earlier one.
+  EXPECT_EQ(out.result.steps_to_target, out.result.train_env_steps);
+}
+
+TEST(StopTracker, StepsToTargetAreThoseOfTheConfirmingEvaluation) {
+  StopRule rule;
+  rule.target_success = 0.9;
+  StopTracker tracker(rule);
+  TrainingResult result;
+  const auto point = [](long long steps) {
+    CurvePoint p;
+    p.env_steps = steps;
+    return p;
+  };
+  EXPECT_FALSE(tracker.record(point(1000), 0.95, result));
+  EXPECT_FALSE(tracker.record(point(2000), 0.80, result));  // the streak breaks
+  EXPECT_FALSE(tracker.record(point(3000), 0.92, result));
+  EXPECT_TRUE(tracker.record(point(4000), 0.91, result));
+  EXPECT_TRUE(result.reached);
+  EXPECT_EQ(result.steps_to_target, 4000);
 }
 
 TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
