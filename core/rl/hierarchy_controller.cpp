@@ -23,6 +23,7 @@ void HierarchyController::reset() {
   net_.reset_state();
   current_.reset();
   steps_in_subtask_ = 0;
+  last_goal_ = sim::Goal::Zero();
   steps_ = 0;
   placed_ = false;
   value_ = 0;
@@ -32,7 +33,9 @@ void HierarchyController::reset() {
 bool HierarchyController::running_subtask_ended(const sim::TaskState& state) const {
   if (!current_) return true;
   if (steps_in_subtask_ >= sim::step_cap(*current_)) return true;
-  return steps_in_subtask_ >= 1 && sim::objective_done(sim::objective_of(*current_), state);
+  // Against the goal the last step acted on, as the environment judges it.
+  return steps_in_subtask_ >= 1 &&
+         sim::objective_done_for_goal(sim::objective_of(*current_), state, last_goal_);
 }
 
 HierarchyController::Decision HierarchyController::act(const sim::Observation& observation,
@@ -67,6 +70,7 @@ HierarchyController::Decision HierarchyController::act(const sim::Observation& o
   }
   const sim::Subtask subtask = *current_;
   const sim::Goal goal = sim::objective_goal(sim::objective_of(subtask), state);
+  last_goal_ = goal;
   d.subtask = subtask;
   d.action = experts_[static_cast<std::size_t>(subtask)]->act(subtask, observation, goal, state);
   d.value = value_;

@@ -47,6 +47,7 @@ class HierarchyController {
   DecisionCache cache_;
   std::optional<sim::Subtask> current_;
   int steps_in_subtask_ = 0;
+  sim::Goal last_goal_ = sim::Goal::Zero();  // the goal the last action was for
   int steps_ = 0;
   bool placed_ = false;
   double value_ = 0;

@@ -25,7 +25,10 @@ struct StepResult {
   Eigen::Vector3d achieved_goal;  // for the objective the step was scored on
   double reward = 0;              // -||achieved - goal|| with the goal passed to step()
   bool task_success = false;      // object within 0.05 m of the episode goal
-  bool objective_done = false;    // the objective's termination predicate
+  // The objective's termination predicate on the state after the step, judged against
+  // the goal passed to step() (the goal acted on), as the replay judges a stored
+  // transition: one rule, so a stored done equals the environment's.
+  bool objective_done = false;
   bool episode_over = false;      // the 50th step was taken (reset() before stepping again),
                                   // or a fault ended it (a fresh episode has already begun)
   PhysicsFault fault = PhysicsFault::kNone;

@@ -179,7 +179,7 @@ StepResult PickPlaceEnv::step(std::span<const double> action, std::span<const do
   result.achieved_goal = achieved_goal(objective, state);
   result.reward = compute_reward(result.achieved_goal, agent_goal);
   result.task_success = is_task_success(state.object, episode_goal_);
-  result.objective_done = objective_done(objective, state);
+  result.objective_done = objective_done_for_goal(objective, state, agent_goal);
   result.episode_over = needs_reset_ || result.fault != PhysicsFault::kNone;
   return result;
 }

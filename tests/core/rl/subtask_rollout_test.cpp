@@ -65,6 +65,37 @@ class FaultAtStep final : public sim::Environment {
   int fault_at_, steps_ = 0;
 };
 
+// One termination rule: on real episodes with training noise, every stored transition's
+// done (recomputed by the replay with the goal acted on) equals the environment's (a
+// segment ends at the environment's first done, so only its last transition may be
+// terminal, and is exactly when the subtask's predicate fired).
+TEST(SubtaskRollout, EveryStoredDoneEqualsTheEnvironmentsOnNoisyEpisodes) {
+  const auto world = fetch_block();
+  sim::PickPlaceEnv env(world);
+  sim::ScriptedPolicy scripted;
+  const ExplorationNoise noise;
+  Rng rng(11);
+  for (sim::Subtask subtask : sim::kAllSubtasks) {
+    SegmentReplay replay(100'000, sim::objective_of(subtask),
+                         2 * world->object_spec().half_width_m);
+    std::size_t index = 0;
+    int terminals = 0;
+    for (std::uint64_t e = 0; e < 60; ++e) {
+      const SubtaskEpisode episode =
+          run_subtask_episode(env, subtask, {&scripted, &scripted, &scripted}, scripted, &noise,
+                              derive_seed(17, e), rng);
+      replay.add_segment(episode.segment);
+      for (std::size_t t = 0; t < episode.segment.size(); ++t, ++index) {
+        const bool env_done = episode.subtask_done && t + 1 == episode.segment.size();
+        ASSERT_EQ(replay.done_for(index, episode.segment[t].goal), env_done ? 1.0f : 0.0f)
+            << sim::subtask_name(subtask) << " episode " << e << " step " << t;
+      }
+      terminals += episode.subtask_done ? 1 : 0;
+    }
+    EXPECT_GT(terminals, 10) << sim::subtask_name(subtask) << ": too few terminals to judge";
+  }
+}
+
 TEST(SubtaskRollout, ThePrefixPoliciesRunTheEarlierSubtasksAndAreCounted) {
   sim::PickPlaceEnv env(fetch_block());
   CountingPolicy approach, manipulate, expert;
