@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
         const auto t0 = Clock::now();
         for (int i = 0; i < updates; ++i) {
           agents[k]->update(batch);
-          agents[k]->update_targets();
+          agents[k]->update_targets(1);
         }
         ups_by_threads[k] = std::max(
             ups_by_threads[k], updates / std::chrono::duration<double>(Clock::now() - t0).count());

@@ -1,7 +1,9 @@
 // pnp-paper-table: reproduces the paper's Table I on the fetch world (DDPG+HER experts +
 // HLC, BC experts + HLC, end-to-end DDPG+HER; several seeds; all to the same success
-// level), evaluates the final hierarchy on 1000 held-out episodes on both robots, and
-// writes docs/RESULTS.md, docs/results/curves.csv and docs/results/learning_curves.svg.
+// level) under one training preset (training/preset.h), evaluates the final hierarchy on
+// 1000 held-out episodes on both robots, and writes OUT/RESULTS.md, OUT/results/curves.csv
+// and OUT/results/learning_curves.svg (OUT: runs/paper-table; --out docs replaces the
+// committed results).
 
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +16,7 @@
 #include "common/validate.h"
 #include "nn/gemm_path.h"
 #include "tools/common/cli.h"
+#include "tools/common/preset_option.h"
 #include "tools/common/progress_line.h"
 #include "tools/paper_table/report.h"
 
@@ -28,14 +31,24 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 
 int main(int argc, char** argv) {
   using namespace pnp;
-  CLI::App app{"Reproduce the paper's Table I and write docs/RESULTS.md", "pnp-paper-table"};
+  CLI::App app{"Reproduce the paper's Table I and write RESULTS.md", "pnp-paper-table"};
+  const training::Preset& preset = tools::preset_in_args(argc, argv);
+  std::string preset_name(preset.name);
+  bool show_preset = false;
+  tools::add_preset_options(app, preset_name, show_preset);
   int seeds = 3;
   std::uint64_t first_seed = 0;
   bool quick = false, skip_bc = false, skip_bc_original = false, skip_e2e = false,
        skip_panda = false;
-  long long e2e_max_steps = 1'500'000, expert_max_steps = 200'000, hlc_max_steps = 100'000;
-  std::string out_dir = "docs", prefix = "chained";
+  long long e2e_max_steps = preset.e2e_stop.max_steps,
+            expert_max_steps = preset.expert_stop.max_steps,
+            hlc_max_steps = preset.hlc_stop.max_steps;
+  std::string out_dir = "runs/paper-table",
+              prefix = preset.chained_experts ? "chained" : "scripted";
   tools::ExperimentSettings s;
+  s.ddpg = preset.ddpg;
+  s.ddpg.learn_gripper = !preset.scripted_gripper;
+  s.a3c = preset.a3c;
   app.add_option("--seeds", seeds, "seeds per method")->capture_default_str();
   app.add_option("--first-seed", first_seed)->capture_default_str();
   app.add_flag("--quick", quick,
@@ -58,15 +71,11 @@ int main(int argc, char** argv) {
                  "experts before each trained expert: chained (the learned ones) or scripted "
                  "(the paper)")
       ->capture_default_str();
-  s.ddpg.updates_per_transition = 0.5;
   app.add_option("--updates-per-transition", s.ddpg.updates_per_transition,
                  "DDPG+HER and BC gradient steps per stored transition (0: the original's 40 "
                  "per cycle)")
       ->capture_default_str();
-  // Experts stop above the hierarchy's 95%: the stop rule on 100 episodes accepts experts
-  // a little below their target, and a hierarchy is no better than its weakest expert
-  // (measured: at 0.95, one seed's hierarchy scored 0.938 held out; at 0.97, 0.993).
-  double expert_target = 0.97;
+  double expert_target = preset.expert_stop.target_success;
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")
       ->capture_default_str();
@@ -74,8 +83,14 @@ int main(int argc, char** argv) {
   app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", fresh_eval_scenes,
                "new evaluation scenes at every evaluation (default), or the same ones every time");
   app.add_option("--threads", s.threads, "worker threads (0: all cores)");
-  app.add_option("--out", out_dir, "where RESULTS.md and results/ go")->capture_default_str();
+  app.add_option("--out", out_dir,
+                 "where RESULTS.md and results/ go (docs: replace the committed results)")
+      ->capture_default_str();
   return tools::run_tool(app, argc, argv, [&] {
+    if (show_preset) {
+      std::printf("%s\n", training::to_json(preset).dump(2).c_str());
+      return;
+    }
     require_positive(seeds, "--seeds");
     if (prefix != "chained" && prefix != "scripted")
       throw_invalid_argument("--prefix", "chained or scripted", "\"" + prefix + "\"");
@@ -90,9 +105,13 @@ int main(int argc, char** argv) {
       s.held_out_episodes = 500;
     }
     s.ddpg.validate();
-    s.expert_stop = {expert_max_steps, expert_target, 1000, 100, 2};
-    s.hlc_stop = {hlc_max_steps, 0.95, 1000, 100, 2};
-    s.e2e_stop = {e2e_max_steps, 0.95, 10'000, 100, 2};
+    s.expert_stop = preset.expert_stop;
+    s.hlc_stop = preset.hlc_stop;
+    s.e2e_stop = preset.e2e_stop;
+    s.expert_stop.max_steps = expert_max_steps;
+    s.expert_stop.target_success = expert_target;
+    s.hlc_stop.max_steps = hlc_max_steps;
+    s.e2e_stop.max_steps = e2e_max_steps;
     for (rl::StopRule* rule : {&s.expert_stop, &s.hlc_stop, &s.e2e_stop})
       rule->fresh_eval_scenes = fresh_eval_scenes;
     require_positive(bc_original_eval_interval, "--bc-original-eval-interval");
@@ -110,6 +129,8 @@ int main(int argc, char** argv) {
     context.code_commit = kCodeCommit;
     context.gemm_path = nn::gemm_path_name(nn::active_gemm_path());  // refuses a bad PNP_GEMM
     context.quick = quick;
+    context.preset = preset_name;
+    context.uses_demonstrations = preset.uses_demonstrations;
     context.settings = s;
     context.bc_original_eval_interval = bc_original_eval_interval;
     const std::filesystem::path out(out_dir);

@@ -16,7 +16,9 @@
 #include "nn/checkpoint_io.h"
 #include "nn/gemm_path.h"
 #include "tools/common/cli.h"
+#include "tools/common/preset_option.h"
 #include "tools/common/progress_line.h"
+#include "training/preset.h"
 #include "training/role_training.h"
 #include "training/training_json.h"
 
@@ -27,10 +29,21 @@ using namespace pnp;
 struct Options {
   training::TrainingSpec spec;
   std::string robot = "fetch", object = "block", out = "runs/latest";
-  std::string init, experts, prefix = "scripted", activation = "relu";
-  bool json = false, quiet = false;
+  std::string init, experts, prefix, activation, preset;
+  bool json = false, quiet = false, show_preset = false;
   std::size_t threads = 0;
 };
+
+// The defaults: the preset's spec of the role named on the command line.
+Options preset_defaults(int argc, char** argv) {
+  const training::Preset& preset = tools::preset_in_args(argc, argv);
+  Options o;
+  o.preset = std::string(preset.name);
+  o.spec = training::preset_spec(preset, tools::value_in_args(argc, argv, "--role", "approach"));
+  o.prefix = preset.chained_experts ? "chained" : "scripted";
+  o.activation = std::string(nn::activation_name(o.spec.ddpg.hidden_activation));
+  return o;
+}
 
 void add_ddpg_options(CLI::App& app, Options& o) {
   rl::DdpgHerConfig& d = o.spec.ddpg;
@@ -45,6 +58,9 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   app.add_option("--critic-lr", d.critic_learning_rate)->capture_default_str();
   app.add_option("--gamma", d.gamma)->capture_default_str();
   app.add_option("--polyak", d.polyak)->capture_default_str();
+  app.add_option("--polyak-every-updates", d.polyak_every_updates,
+                 "targets move by --polyak per this many gradient steps (0: once per cycle)")
+      ->capture_default_str();
   app.add_option("--her-k", d.her_k)->capture_default_str();
   app.add_option("--noise-eps", d.noise_eps)->capture_default_str();
   app.add_option("--random-eps", d.random_eps)->capture_default_str();
@@ -88,10 +104,15 @@ std::vector<std::string> prefix_specs(const Options& o) {
   if (o.prefix == "scripted" || o.prefix == "chained") {
     std::vector<std::string> specs;
     for (std::size_t k = 0; k < count; ++k) {
-      specs.push_back(o.prefix == "scripted"
-                          ? "scripted"
-                          : o.out + "/" + std::string(sim::subtask_name(sim::kAllSubtasks[k])) +
-                                ".ckpt");
+      const std::string earlier(sim::subtask_name(sim::kAllSubtasks[k]));
+      const std::string path = o.out + "/" + earlier + ".ckpt";
+      if (o.prefix == "chained" && !std::filesystem::exists(path)) {
+        throw_invalid_argument("--prefix chained",
+                               "the " + earlier + " expert trained first (pnp-train --role " +
+                                   earlier + " --out " + o.out + "), or --prefix scripted",
+                               "no file " + path);
+      }
+      specs.push_back(o.prefix == "scripted" ? "scripted" : path);
     }
     return specs;
   }
@@ -150,6 +171,8 @@ nlohmann::json train(Options& o) {
   summary["robot"] = o.robot;
   summary["object"] = o.object;
   summary["seed"] = o.spec.seed;
+  summary["preset"] = o.preset;
+  summary["uses_demonstrations"] = o.spec.ddpg.demo_episodes > 0;
   summary["code_commit"] = kCodeCommit;
   summary["gemm_path"] = nn::gemm_path_name(nn::active_gemm_path());
   summary["config"] = training::to_json(o.spec);
@@ -165,7 +188,8 @@ nlohmann::json train(Options& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Train a subtask expert, the choreographer or a baseline, locally", "pnp-train"};
-  Options o;
+  Options o = preset_defaults(argc, argv);
+  tools::add_preset_options(app, o.preset, o.show_preset);
   app.add_option("--role", o.spec.role, "approach, manipulate, retract, hlc or e2e")
       ->capture_default_str();
   app.add_option("--algo", o.spec.algorithm,
@@ -203,7 +227,15 @@ int main(int argc, char** argv) {
   app.add_option("--entropy", o.spec.a3c.entropy_weight)->capture_default_str();
   app.add_option("--hlc-gamma", o.spec.a3c.gamma, "hlc: discount per environment step")
       ->capture_default_str();
+  app.add_flag("--predicate-inputs,!--no-predicate-inputs", o.spec.a3c.network.predicate_inputs,
+               "hlc: the three subtask predicates as inputs");
+  app.add_flag("--mask-finished,!--no-mask-finished", o.spec.a3c.network.mask_finished,
+               "hlc: finished subtasks cannot be chosen");
   return tools::run_tool(app, argc, argv, [&] {
+    if (o.show_preset) {
+      std::cout << training::to_json(training::find_preset(o.preset, "--preset")).dump(2) << "\n";
+      return;
+    }
     o.spec.validate();
     nn::active_gemm_path();  // a bad PNP_GEMM is refused before any work
     const nlohmann::json summary = train(o);

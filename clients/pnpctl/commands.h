@@ -9,6 +9,7 @@
 
 #include "clients/pnpctl/endpoints.h"
 #include "pnp/train/v1/train_service.pb.h"
+#include "training/training_spec.h"
 
 namespace pnp::pnpctl {
 
@@ -18,6 +19,7 @@ struct TrainArgs {
   std::string role = "approach";
   std::string algorithm;  // empty: ddpg_her for experts and e2e, a3c for hlc
   std::string robot = "fetch", object = "block";
+  std::string preset{training::kDefaultPreset};  // training/preset.h; unset fields take its values
   std::uint64_t seed = 0;
   long long max_steps = 0;
   double target_success = 0;

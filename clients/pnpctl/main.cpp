@@ -11,6 +11,7 @@
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
+#include "training/preset.h"
 
 namespace {
 
@@ -47,12 +48,18 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   cmd.add_option("--robot", a.robot)->capture_default_str();
   cmd.add_option("--object", a.object)->capture_default_str();
   cmd.add_option("--seed", a.seed)->capture_default_str();
-  // Unset is the service's default; a typed 0 is refused, never taken as "unset".
-  cmd.add_option("--max-steps", a.max_steps, "training env steps cap [service: 200000]")
-      ->check(positive());
-  cmd.add_option("--target-success", a.target_success, "success to reach twice [0.95]")
+  std::vector<std::string> presets;
+  for (const auto& p : pnp::training::presets()) presets.emplace_back(p.name);
+  cmd.add_option("--preset", a.preset,
+                 "the configuration unset options take (pnp-train --preset P --show-preset "
+                 "prints it); ours+demos uses demonstrations")
+      ->check(CLI::IsMember(presets))
+      ->capture_default_str();
+  // Unset is the preset's value; a typed 0 is refused, never taken as "unset".
+  cmd.add_option("--max-steps", a.max_steps, "training env steps cap [preset]")->check(positive());
+  cmd.add_option("--target-success", a.target_success, "success to reach twice [preset]")
       ->check(success_rate());
-  cmd.add_option("--eval-interval", a.eval_interval, "training steps between evaluations [1000]")
+  cmd.add_option("--eval-interval", a.eval_interval, "training steps between evaluations [preset]")
       ->check(positive());
   cmd.add_option("--eval-episodes", a.eval_episodes, "episodes per evaluation [100]")
       ->check(positive());
@@ -156,7 +163,6 @@ int main(int argc, char** argv) {
   });
 
   PipelineArgs pipeline;
-  pipeline.experts.updates_per_transition = 0.5;
   auto* pipeline_cmd = app.add_subcommand(
       "pipeline",
       "train the three experts (chained), then the choreographer over them, promote, evaluate");
@@ -178,6 +184,7 @@ int main(int argc, char** argv) {
     c.robot = e.robot;
     c.object = e.object;
     c.seed = e.seed;
+    c.preset = e.preset;
     c.target_success = e.target_success;
     c.eval_interval = e.eval_interval;
     c.eval_episodes = e.eval_episodes;

@@ -1,5 +1,6 @@
 // pipeline: the paper's method through the platform. The three experts are trained in
-// order, each after the learned experts before it (chained, docs/LEARNING.md), then the
+// order, each after the learned experts before it (chained, docs/LEARNING.md) where the
+// preset says so and after scripted ones otherwise, then the
 // choreographer over them; each final checkpoint is promoted; the served hierarchy is
 // evaluated on held-out episodes through the simulation and inference services.
 #include <fstream>
@@ -15,6 +16,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
+#include "training/preset.h"
 
 namespace pnp::pnpctl {
 namespace {
@@ -103,7 +105,8 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   for (const char* role : {"approach", "manipulate", "retract"}) {
     TrainArgs a = args.experts;
     a.role = role;
-    a.prefix = experts;  // chained: after the learned experts before it
+    // Chained: after the learned experts before it; else after scripted ones.
+    if (training::find_preset(a.preset, "--preset").chained_experts) a.prefix = experts;
     results.push_back(train_and_promote(endpoints, a));
     experts.push_back(results.back().run.latest_checkpoint_id());
   }

@@ -15,6 +15,7 @@ train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
   r.set_robot(parse_robot(a.robot, "--robot"));
   r.set_object(parse_object(a.object, "--object"));
   r.set_seed(a.seed);
+  r.set_preset(a.preset);
   if (a.max_steps) r.mutable_stop()->set_max_steps(a.max_steps);
   if (a.target_success) r.mutable_stop()->set_target_success(a.target_success);
   if (a.eval_interval) r.mutable_stop()->set_eval_interval_steps(a.eval_interval);

@@ -24,6 +24,8 @@ std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, Chor
                             {"object", meta.object},
                             {"trunk", meta.network.trunk},
                             {"lstm", meta.network.lstm},
+                            {"predicate_inputs", meta.network.predicate_inputs},
+                            {"mask_finished", meta.network.mask_finished},
                             {"train_env_steps", meta.train_env_steps},
                             {"eval_success", meta.eval_success},
                             {"seed", meta.seed},
@@ -46,6 +48,9 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     out.object = m.at("object");
     out.network.trunk = m.at("trunk").get<std::vector<int>>();
     out.network.lstm = m.at("lstm");
+    // Checkpoints written before these became options had both.
+    out.network.predicate_inputs = m.value("predicate_inputs", true);
+    out.network.mask_finished = m.value("mask_finished", true);
     out.train_env_steps = m.at("train_env_steps");
     out.eval_success = m.at("eval_success");
     out.seed = m.at("seed");

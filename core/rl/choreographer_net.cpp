@@ -6,13 +6,16 @@ namespace pnp::rl {
 namespace {
 
 constexpr int kNormalised = sim::kObservationSize + sim::kGoalSize;
-constexpr int kInputs = kNormalised + sim::kNumSubtasks;
 
 }  // namespace
 
+int ChoreographerSpec::input_size() const {
+  return kNormalised + (predicate_inputs ? sim::kNumSubtasks : 0);
+}
+
 ChoreographerNet::ChoreographerNet(const ChoreographerSpec& spec)
     : spec_(spec),
-      trunk_({kInputs, std::vector<int>(spec.trunk.begin(), spec.trunk.end() - 1),
+      trunk_({spec.input_size(), std::vector<int>(spec.trunk.begin(), spec.trunk.end() - 1),
               spec.trunk.back(), nn::Activation::kELU, nn::Activation::kELU}),
       lstm_(spec.trunk.back(), spec.lstm),
       policy_head_({spec.lstm, {}, sim::kNumSubtasks}),
@@ -40,8 +43,9 @@ void ChoreographerNet::encode(const sim::Observation& observation, const sim::Go
   double raw[kNormalised];
   for (int k = 0; k < sim::kObservationSize; ++k) raw[k] = observation(k);
   for (int k = 0; k < sim::kGoalSize; ++k) raw[sim::kObservationSize + k] = goal(k);
-  nn::ensure_shape(out, kInputs, 1);
+  nn::ensure_shape(out, spec_.input_size(), 1);
   normalizer_.normalize_into(raw, out, 0, 0);
+  if (!spec_.predicate_inputs) return;
   for (sim::Subtask s : sim::kAllSubtasks) {
     out(kNormalised + static_cast<int>(s), 0) =
         sim::objective_done(sim::objective_of(s), state) ? 1.0f : 0.0f;

@@ -1,7 +1,7 @@
 #pragma once
 // The High Level Choreographer's network: [normalised observation (25); normalised
-// episode goal (3); the three subtask predicates as 0/1 (approach reached, object
-// grasped, object placed)] -> FC 128 -> FC 128 (ELU) -> LSTM cell (32) -> policy head (3
+// episode goal (3); optionally the three subtask predicates as 0/1 (approach reached,
+// object grasped, object placed)] -> FC 128 -> FC 128 (ELU) -> LSTM cell (32) -> policy head (3
 // logits: approach, manipulate, retract) and value head. The predicates are functions of
 // the observation and goal; giving them explicitly lets the choreographer see which phase
 // it is in from the start (without them greedy evaluation locked onto repeating one
@@ -24,6 +24,12 @@ namespace pnp::rl {
 struct ChoreographerSpec {
   std::vector<int> trunk{128, 128};
   int lstm = 32;
+  // Domain knowledge, computed from observation and goal: the three predicates as inputs,
+  // and finished subtasks masked out of the choices (rl/hlc_episode.h). The paper's
+  // choreographer has neither: it sees observation and goal only.
+  bool predicate_inputs = true;
+  bool mask_finished = true;
+  int input_size() const;
   bool operator==(const ChoreographerSpec&) const = default;
 };
 

@@ -278,14 +278,14 @@ double DdpgHerAgent::behaviour_clone(const SampledBatch& batch) {
   return squared / static_cast<double>(n * kAct);
 }
 
-void DdpgHerAgent::update_targets() {
+void DdpgHerAgent::update_targets(int gradient_steps) {
+  const double polyak = target_coefficient(config_, gradient_steps);
   pool_.parallel_for(parts_.size(), [&](std::size_t k) {
     for (auto [target, online] :
          {std::pair{&actor_target_, &actor_}, {&critic_target_, &critic_}}) {
       const auto [begin, count] = slice(k, online->params().size());
       nn::polyak_update(target->params().subspan(begin, count),
-                        std::span<const float>(online->params()).subspan(begin, count),
-                        config_.polyak);
+                        std::span<const float>(online->params()).subspan(begin, count), polyak);
     }
   });
 }

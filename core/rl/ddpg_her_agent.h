@@ -79,7 +79,8 @@ class DdpgHerAgent {
   // actor's loss also has demo_bc_weight x the mean squared error to the demonstrated
   // actions on that batch.
   UpdateStats update(const SampledBatch& batch, const SampledBatch* demos = nullptr);
-  void update_targets();  // Polyak averaging
+  // Polyak averaging after a round of `gradient_steps` updates (rl::target_coefficient).
+  void update_targets(int gradient_steps);
   // One behaviour-cloning step on the actor: mean squared error to the batch's actions
   // (for demonstrations the batch is sampled without relabelling). Returns the loss.
   double behaviour_clone(const SampledBatch& batch);

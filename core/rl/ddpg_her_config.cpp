@@ -54,9 +54,17 @@ void DdpgHerConfig::validate() const {
   require(updates_per_transition >= 0 && std::isfinite(updates_per_transition),
           "updates_per_transition", "a non-negative number (0: updates_per_cycle)",
           updates_per_transition);
+  require(polyak_every_updates >= 0, "polyak_every_updates",
+          "a non-negative integer (0: once per cycle)", polyak_every_updates);
   require(demo_episodes >= 0, "demo_episodes", "a non-negative integer", demo_episodes);
   require(demo_pretrain_updates >= 0, "demo_pretrain_updates", "a non-negative integer",
           demo_pretrain_updates);
+}
+
+double target_coefficient(const DdpgHerConfig& config, int gradient_steps) {
+  if (config.polyak_every_updates == 0) return config.polyak;
+  return std::pow(config.polyak, static_cast<double>(gradient_steps) /
+                                     static_cast<double>(config.polyak_every_updates));
 }
 
 DdpgHerConfig original_bc_config(DdpgHerConfig base) {

@@ -27,6 +27,13 @@ struct DdpgHerConfig {
   double norm_std_floor = 0.01;
   int episodes_per_cycle = 2;  // rollouts between two rounds of updates
   int updates_per_cycle = 40;  // gradient steps per cycle; targets updated once per cycle
+  // How fast the targets follow, per gradient step. 0: once per cycle by `polyak`,
+  // whatever the cycle's number of gradient steps (the original, whose cycles all have 40).
+  // n > 0: at the rate of `polyak` per n gradient steps, so a cycle of u steps moves them
+  // with polyak^(u / n). With updates_per_transition, a cycle's steps follow its segments'
+  // lengths (an approach cycle gets ~10), and per cycle the targets would move 4x faster
+  // per gradient step than the original's; n = 40 keeps the original's rate.
+  int polyak_every_updates = 0;
   // > 0: a cycle's gradient steps are this many per transition it stored instead of
   // updates_per_cycle (the original's 40 per 2 x 50 steps is 0.4). Subtask segments are
   // short (an approach ends in ~10 steps), so a fixed 40 per cycle spends several updates
@@ -49,6 +56,9 @@ struct DdpgHerConfig {
   // Throws INVALID_ARGUMENT naming the field and the expected value.
   void validate() const;
 };
+
+// The Polyak coefficient for a round of `gradient_steps` steps (see polyak_every_updates).
+double target_coefficient(const DdpgHerConfig& config, int gradient_steps);
 
 // The original code's behaviour-cloning networks and schedule, for the paper-faithful BC
 // row: 2 x 128 ELU, Adam 1e-4, one gradient step per environment step on one labelled

@@ -36,8 +36,13 @@ int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, 
   throw_internal("choose_subtask: no subtask has a positive probability");
 }
 
-std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state) {
+std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state,
+                                                       bool mask_finished) {
   std::array<bool, sim::kNumSubtasks> out{};
+  if (!mask_finished) {
+    out.fill(true);
+    return out;
+  }
   bool any = false;
   for (sim::Subtask s : sim::kAllSubtasks) {
     const auto k = static_cast<std::size_t>(s);
@@ -64,7 +69,8 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
     std::array<double, sim::kNumSubtasks> logits{};
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);
-    d.probabilities = masked_softmax(logits, available_subtasks(env.task_state()));
+    d.probabilities =
+        masked_softmax(logits, available_subtasks(env.task_state(), net.spec().mask_finished));
     d.choice = choose_subtask(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);

@@ -43,7 +43,9 @@ struct HlcEpisode {
 // policy spent decisions re-running a finished subtask for one step ("AAR": approach
 // twice, then retract without a grasp), and those episodes' failures were charged to
 // the good first choice. Any order of the remaining subtasks stays possible.
-std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state);
+// mask_finished false (the paper's choreographer): every subtask, always.
+std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state,
+                                                       bool mask_finished);
 
 // Softmax of the choreographer's logits over the available subtasks; the others get
 // probability 0.

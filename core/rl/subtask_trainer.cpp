@@ -216,7 +216,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
         ++updates;
         ++updates_since_eval;
       }
-      if (ddpg) agent->update_targets();
+      if (ddpg) agent->update_targets(cycle_updates);
     }
     if (result.train_env_steps < next_eval) continue;
 

@@ -57,6 +57,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
           {"robot", sim::robot_name(s.robot)},
           {"object", sim::object_name(s.object)},
           {"seed", s.seed},
+          {"preset", s.preset},
           {"stop",
            {{"max_steps", s.stop.max_steps},
             {"target_success", s.stop.target_success},
@@ -85,6 +86,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"episodes_per_cycle", d.episodes_per_cycle},
             {"updates_per_cycle", d.updates_per_cycle},
             {"updates_per_transition", d.updates_per_transition},
+            {"polyak_every_updates", d.polyak_every_updates},
             {"demo_episodes", d.demo_episodes},
             {"demo_pretrain_updates", d.demo_pretrain_updates},
             {"demo_bc_weight", d.demo_bc_weight},
@@ -98,7 +100,9 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"value_weight", s.a3c.value_weight},
             {"max_grad_norm", s.a3c.max_grad_norm},
             {"trunk", s.a3c.network.trunk},
-            {"lstm", s.a3c.network.lstm}}}};
+            {"lstm", s.a3c.network.lstm},
+            {"predicate_inputs", s.a3c.network.predicate_inputs},
+            {"mask_finished", s.a3c.network.mask_finished}}}};
 }
 
 namespace {
@@ -126,6 +130,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
   s.robot = sim::parse_robot(robot, "robot");
   s.object = sim::parse_object(object, "object");
   read(j, "seed", s.seed, "");
+  read(j, "preset", s.preset, "");
   read(j, "scripted_gripper", s.scripted_gripper, "");
   if (const auto stop = j.find("stop"); stop != j.end()) {
     read(*stop, "max_steps", s.stop.max_steps, "stop.");
@@ -159,6 +164,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*ddpg, "episodes_per_cycle", d.episodes_per_cycle, p);
     read(*ddpg, "updates_per_cycle", d.updates_per_cycle, p);
     read(*ddpg, "updates_per_transition", d.updates_per_transition, p);
+    read(*ddpg, "polyak_every_updates", d.polyak_every_updates, p);
     read(*ddpg, "demo_episodes", d.demo_episodes, p);
     read(*ddpg, "demo_pretrain_updates", d.demo_pretrain_updates, p);
     read(*ddpg, "demo_bc_weight", d.demo_bc_weight, p);
@@ -175,6 +181,8 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*a3c, "max_grad_norm", s.a3c.max_grad_norm, p);
     read(*a3c, "trunk", s.a3c.network.trunk, p);
     read(*a3c, "lstm", s.a3c.network.lstm, p);
+    read(*a3c, "predicate_inputs", s.a3c.network.predicate_inputs, p);
+    read(*a3c, "mask_finished", s.a3c.network.mask_finished, p);
   }
   return s;
 }

@@ -17,12 +17,18 @@
 
 namespace pnp::training {
 
+// The preset (training/preset.h) every tool and the training service start from.
+inline constexpr std::string_view kDefaultPreset = "ours";
+
 struct TrainingSpec {
   std::string role = "approach";       // approach, manipulate, retract, hlc or e2e
   std::string algorithm = "ddpg_her";  // ddpg_her, bc, bc_offline (experts), a3c (hlc)
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
   std::uint64_t seed = 0;
+  // The preset the spec started from, before any single value was overridden ("": a run
+  // stored before presets existed).
+  std::string preset;
   rl::StopRule stop;
   rl::DdpgHerConfig ddpg;
   bool scripted_gripper = false;  // experts: keep the gripper command scripted (the paper's)

@@ -2,6 +2,7 @@
 
 #include "common/error.h"
 #include "services/common/convert.h"
+#include "training/preset.h"
 
 namespace pnp::services {
 namespace {
@@ -35,6 +36,9 @@ void read_ddpg(const train::v1::DdpgHerConfig& in, training::TrainingSpec& spec)
   if (in.has_updates_per_transition()) out.updates_per_transition = in.updates_per_transition();
   if (in.has_scripted_gripper()) spec.scripted_gripper = in.scripted_gripper();
   if (in.has_demo_episodes()) out.demo_episodes = in.demo_episodes();
+  if (in.has_polyak_every_updates()) out.polyak_every_updates = in.polyak_every_updates();
+  if (in.has_demo_pretrain_updates()) out.demo_pretrain_updates = in.demo_pretrain_updates();
+  if (in.has_demo_bc_weight()) out.demo_bc_weight = in.demo_bc_weight();
 }
 
 void read_a3c(const train::v1::A3cConfig& in, rl::A3cConfig& out) {
@@ -42,6 +46,8 @@ void read_a3c(const train::v1::A3cConfig& in, rl::A3cConfig& out) {
   if (in.has_learning_rate()) out.learning_rate = in.learning_rate();
   if (in.has_gamma()) out.gamma = in.gamma();
   if (in.has_entropy_weight()) out.entropy_weight = in.entropy_weight();
+  if (in.has_predicate_inputs()) out.network.predicate_inputs = in.predicate_inputs();
+  if (in.has_mask_finished()) out.network.mask_finished = in.mask_finished();
 }
 
 }  // namespace
@@ -73,8 +79,9 @@ train::v1::Algorithm algorithm_from_name(std::string_view name) {
 
 std::pair<training::TrainingSpec, training::CheckpointRefs> from_proto(
     const train::v1::CreateTrainingRunRequest& r) {
-  training::TrainingSpec spec;
-  spec.role = role_name(r.role(), "role");
+  const training::Preset& preset = training::find_preset(
+      r.preset().empty() ? training::kDefaultPreset : std::string_view(r.preset()), "preset");
+  training::TrainingSpec spec = training::preset_spec(preset, role_name(r.role(), "role"));
   spec.algorithm = algorithm_name(r.algorithm(), "algorithm");
   spec.robot = from_proto(r.robot(), "robot");
   spec.object = from_proto(r.object(), "object");

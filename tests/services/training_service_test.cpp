@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <nlohmann/json.hpp>
 
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
@@ -124,6 +125,24 @@ TEST_F(TrainingServiceTest, CreateWatchMetricsAndCheckpoints) {
             checkpoints.checkpoints(checkpoints.checkpoints_size() - 1).checkpoint_id());
   EXPECT_TRUE(got.run().has_finish_time());
   EXPECT_NE(got.run().config_json().find("\"hidden\":[32,32]"), std::string::npos);
+  EXPECT_NE(got.run().config_json().find("\"preset\":\"ours\""), std::string::npos)
+      << "no preset asked for: the default";
+}
+
+// Unset fields take the preset's values; fields the request sets win.
+TEST_F(TrainingServiceTest, APresetFillsTheUnsetFieldsAndTheRequestsOwnWin) {
+  start("approach");
+  tv1::CreateTrainingRunRequest r = small_request();
+  r.set_preset("paper");
+  tv1::CreateTrainingRunResponse created;
+  ASSERT_TRUE(create(r, created).ok());
+  const auto config = nlohmann::json::parse(created.run().config_json()).at("spec");
+  EXPECT_EQ(config.at("preset"), "paper");
+  EXPECT_EQ(config.at("scripted_gripper"), true) << "the paper's gripper";
+  EXPECT_EQ(config.at("ddpg").at("demo_bc_weight"), 0.0);
+  EXPECT_EQ(config.at("ddpg").at("updates_per_transition"), 0.25) << "set by the request";
+  EXPECT_EQ(config.at("stop").at("eval_interval_steps"), 200) << "set by the request";
+  EXPECT_EQ(config.at("stop").at("target_success"), 1.0) << "set by the request";
 }
 
 struct BadCreate {
@@ -161,6 +180,8 @@ TEST_F(TrainingServiceTest, BadCreateRequestsAreRefusedNamingTheFieldAndStoreNot
        grpc::StatusCode::INVALID_ARGUMENT, "prefix_checkpoint_ids: expected 0 ids"},
       {"experts for an expert", [](auto& r) { r.add_expert_checkpoint_ids(1); },
        grpc::StatusCode::INVALID_ARGUMENT, "expert_checkpoint_ids"},
+      {"unknown preset", [](auto& r) { r.set_preset("fast"); }, grpc::StatusCode::INVALID_ARGUMENT,
+       "preset: expected one of [\"paper\",\"ours\",\"ours+demos\"], got \"fast\""},
   };
   for (const auto& c : cases) {
     tv1::CreateTrainingRunRequest r = small_request();

@@ -11,7 +11,7 @@ int run_tool(CLI::App& app, int argc, char** argv, const std::function<void()>& 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : 2;  // --help is a parse "error" that exits 0
   }
   try {
     body();

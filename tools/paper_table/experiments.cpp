@@ -78,6 +78,7 @@ MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
   config.seed = derive_seed(seed, 4);
   config.stop = s.e2e_stop;
   config.threads = s.threads;
+  config.ddpg.learn_gripper = true;  // the baseline has no scripted gripper to keep
   config.ddpg.random_gripper = true;
   auto out = rl::train_subtask_expert(world, config,
                                       [&](const rl::CurvePoint& p) { progress("e2e", "e2e", p); });

@@ -87,6 +87,9 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       100 * c.settings.hlc_stop.target_success, c.settings.hlc_stop.eval_episodes,
       c.settings.hlc_stop.fresh_eval_scenes ? "new scenes at every evaluation"
                                             : "the same scenes at every evaluation");
+  md += fmt::format("Preset: `{}` ({}).\n\n", c.preset,
+                    c.uses_demonstrations ? "**uses demonstrations**, which the paper does not"
+                                          : "no demonstrations, as in the paper");
   md += fmt::format(
       "Settings: each subtask expert trained after {} (docs/LEARNING.md), to {:.0f}% task "
       "success; DDPG+HER {} x {}, batch {}, {}; demonstrations {} episodes; choreographer A3C "

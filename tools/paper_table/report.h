@@ -15,6 +15,8 @@ struct ReportContext {
   std::string gemm_path;  // nn/gemm_path.h
   std::vector<std::uint64_t> seeds;
   bool quick = false;
+  std::string preset;  // training/preset.h
+  bool uses_demonstrations = false;
   ExperimentSettings settings;
   int bc_original_eval_interval = 0;  // training steps between its evaluations
   std::vector<std::pair<std::string, double>>

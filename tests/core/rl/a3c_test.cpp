@@ -86,6 +86,25 @@ TEST(A3c, RefusesInvalidConfiguration) {
   EXPECT_THROW(c.validate(), Error);
 }
 
+// Without predicate inputs the network reads observation and goal only, and a checkpoint
+// keeps both options (a checkpoint is served with the inputs it was trained on).
+TEST(ChoreographerCheckpoint, KeepsThePaperChoreographersInputsAndMask) {
+  ChoreographerNet net({{16, 16}, 4, false, false});
+  EXPECT_EQ(net.spec().input_size(), sim::kObservationSize + sim::kGoalSize);
+  Rng rng(3);
+  net.initialise(rng);
+  sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+  env.reset(5);
+  nn::Matrix input;
+  net.encode(env.observation(), env.episode_goal(), env.task_state(), input);
+  EXPECT_EQ(input.rows(), sim::kObservationSize + sim::kGoalSize);
+  const ChoreographerMeta meta{"fetch", "block", net.spec(), 10, 0.5, 1, "test"};
+  const LoadedChoreographer loaded = load_choreographer(save_choreographer(meta, net));
+  EXPECT_FALSE(loaded.meta.network.predicate_inputs);
+  EXPECT_FALSE(loaded.meta.network.mask_finished);
+  EXPECT_EQ(loaded.meta.network, net.spec());
+}
+
 TEST(ChoreographerCheckpoint, RoundTripGivesIdenticalDecisionsAndCorruptionIsRefused) {
   ChoreographerNet net({{16, 16}, 4});
   Rng rng(3);

@@ -309,5 +309,24 @@ TEST(UpdateSchedule, PerTransitionCarriesFractionsSoTheRatioIsExact) {
   EXPECT_EQ(schedule.updates_for(0), 0);
 }
 
+// Once per cycle (the original) the targets move by polyak whatever the cycle's steps; at
+// a rate per n steps, two cycles of u steps move them as far as one of 2u, and n steps as
+// far as one original cycle.
+TEST(TargetCoefficient, OncePerCycleOrAtTheOriginalsRatePerGradientStep) {
+  DdpgHerConfig c;
+  EXPECT_DOUBLE_EQ(target_coefficient(c, 7), 0.95);
+  EXPECT_DOUBLE_EQ(target_coefficient(c, 40), 0.95);
+  c.polyak_every_updates = 40;
+  EXPECT_DOUBLE_EQ(target_coefficient(c, 40), 0.95);
+  EXPECT_NEAR(target_coefficient(c, 10) * target_coefficient(c, 10), target_coefficient(c, 20),
+              1e-15);
+  EXPECT_GT(target_coefficient(c, 10), 0.95) << "fewer steps: the targets move less";
+  EXPECT_DOUBLE_EQ(target_coefficient(c, 0), 1.0) << "no step: the targets stay";
+  c.polyak_every_updates = -1;
+  EXPECT_EQ(refusal(c),
+            "polyak_every_updates: expected a non-negative integer (0: once per cycle), got "
+            "-1.000000");
+}
+
 }  // namespace
 }  // namespace pnp::rl

@@ -142,7 +142,7 @@ TEST(SubtaskRollout, ThePrefixDecidesWhereTheExpertStarts) {
 TEST(HlcOptions, ASubtaskWhosePredicateHoldsCannotBeChosen) {
   sim::PickPlaceEnv env(fetch_block());
   env.reset(derive_seed(2, 0));
-  EXPECT_EQ(available_subtasks(env.task_state()), (std::array<bool, 3>{true, true, true}));
+  EXPECT_EQ(available_subtasks(env.task_state(), true), (std::array<bool, 3>{true, true, true}));
   // Run the scripted approach to its predicate: approach is then unavailable.
   for (int t = 0; t < sim::step_cap(sim::Subtask::kApproach); ++t) {
     const sim::TaskState s = env.task_state();
@@ -151,7 +151,9 @@ TEST(HlcOptions, ASubtaskWhosePredicateHoldsCannotBeChosen) {
                  sim::objective_goal(sim::Objective::kApproach, s), sim::Objective::kApproach);
     if (r.objective_done) break;
   }
-  EXPECT_EQ(available_subtasks(env.task_state()), (std::array<bool, 3>{false, true, true}));
+  EXPECT_EQ(available_subtasks(env.task_state(), true), (std::array<bool, 3>{false, true, true}));
+  EXPECT_EQ(available_subtasks(env.task_state(), false), (std::array<bool, 3>{true, true, true}))
+      << "the paper's choreographer may choose any subtask at any decision";
 }
 
 // Probabilities that sum to a little under 1 (rounding) must not let a draw past them

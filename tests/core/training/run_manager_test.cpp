@@ -46,9 +46,17 @@ TEST(TrainingSpecJson, RoundTripsEveryField) {
   spec.ddpg.polyak = 0.9;
   spec.a3c.entropy_weight = 0.02;
   spec.stop.fresh_eval_scenes = false;  // not the default, so the round trip shows
+  spec.preset = "paper";
+  spec.ddpg.polyak_every_updates = 40;
+  spec.a3c.network.predicate_inputs = false;
+  spec.a3c.network.mask_finished = false;
   const TrainingSpec back = spec_from_json(to_json(spec));
   EXPECT_EQ(to_json(back), to_json(spec));
   EXPECT_FALSE(back.stop.fresh_eval_scenes);
+  EXPECT_EQ(back.preset, "paper");
+  EXPECT_EQ(back.ddpg.polyak_every_updates, 40);
+  EXPECT_FALSE(back.a3c.network.predicate_inputs);
+  EXPECT_FALSE(back.a3c.network.mask_finished);
   EXPECT_EQ(back.robot, sim::Robot::kPanda);
   EXPECT_EQ(back.ddpg.hidden, (std::vector<int>{32, 32}));
 }

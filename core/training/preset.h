@@ -1,0 +1,57 @@
+#pragma once
+// Named training configurations, so that nobody assembles the headline from flags. A
+// preset fixes everything that differs between the paper's method as published and ours:
+// demonstrations, the gripper, the update schedule, the target rate, chained experts, the
+// stop rules and what the choreographer sees. Every tool and the training service start
+// from one (kDefaultPreset unless told otherwise); explicit flags or request fields then
+// override single values.
+//
+//   paper       the paper as published: no demonstrations, scripted gripper, experts
+//               after scripted prefixes, the original's 40 updates per 2-episode cycle,
+//               a choreographer that sees observation and goal only (no predicate inputs,
+//               no masking), evaluation once per epoch (5k steps).
+//   ours        every improvement of ours that uses no demonstrations: learned gripper,
+//               chained experts, 0.5 updates per transition at the original's target
+//               rate per gradient step, experts stopped at 97%, predicate inputs and
+//               masking for the choreographer (domain knowledge computed from observation
+//               and goal), evaluation every 1k steps.
+//   ours+demos  ours plus 10 scripted demonstration episodes per expert (their steps
+//               counted), 300 cloning updates and a behaviour-cloning term of weight 5.
+
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "rl/a3c_trainer.h"
+#include "rl/ddpg_her_config.h"
+#include "rl/training_progress.h"
+#include "training/training_spec.h"
+
+namespace pnp::training {
+
+struct Preset {
+  std::string_view name;
+  std::string_view summary;
+  bool uses_demonstrations = false;
+  // Each expert trains after the learned experts before it (true) or after scripted ones.
+  bool chained_experts = true;
+  bool scripted_gripper = false;
+  rl::DdpgHerConfig ddpg;  // experts and the end-to-end baseline
+  rl::A3cConfig a3c;       // the choreographer
+  rl::StopRule expert_stop, hlc_stop, e2e_stop;
+};
+
+// Every preset, in the order above.
+std::span<const Preset> presets();
+// Throws INVALID_ARGUMENT naming `field` and the preset names.
+const Preset& find_preset(std::string_view name, std::string_view field);
+
+// The training spec of one role (approach, manipulate, retract, hlc or e2e) under the
+// preset, with the role's default algorithm (ddpg_her, or a3c for hlc).
+TrainingSpec preset_spec(const Preset& preset, std::string_view role);
+
+// The whole preset: every role's spec and the settings outside them.
+nlohmann::json to_json(const Preset& preset);
+
+}  // namespace pnp::training

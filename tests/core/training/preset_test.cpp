@@ -1,0 +1,80 @@
+#include "training/preset.h"
+
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+
+namespace pnp::training {
+namespace {
+
+constexpr const char* kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
+
+TEST(Preset, EveryRoleOfEveryPresetIsAValidSpecThatRoundTripsThroughJson) {
+  for (const Preset& preset : presets()) {
+    for (const char* role : kRoles) {
+      const TrainingSpec spec = preset_spec(preset, role);
+      EXPECT_NO_THROW(spec.validate()) << preset.name << " " << role;
+      EXPECT_EQ(spec.preset, preset.name);
+      EXPECT_EQ(to_json(spec_from_json(to_json(spec))), to_json(spec)) << preset.name << role;
+    }
+  }
+}
+
+TEST(Preset, TheDefaultUsesNoDemonstrations) {
+  const Preset& preset = find_preset(kDefaultPreset, "preset");
+  EXPECT_FALSE(preset.uses_demonstrations);
+  EXPECT_EQ(preset.ddpg.demo_episodes, 0);
+  EXPECT_EQ(preset.ddpg.demo_bc_weight, 0);
+  EXPECT_EQ(preset.ddpg.demo_pretrain_updates, 0);
+}
+
+// The paper's conditions: what the published method had, nothing of ours.
+TEST(Preset, PaperIsThePublishedMethod) {
+  const Preset& p = find_preset("paper", "preset");
+  EXPECT_FALSE(p.uses_demonstrations);
+  EXPECT_EQ(p.ddpg.demo_episodes, 0);
+  EXPECT_EQ(p.ddpg.demo_bc_weight, 0);
+  EXPECT_TRUE(p.scripted_gripper);
+  EXPECT_FALSE(p.chained_experts);
+  EXPECT_EQ(p.ddpg.updates_per_cycle, 40);
+  EXPECT_EQ(p.ddpg.updates_per_transition, 0);
+  EXPECT_EQ(p.ddpg.episodes_per_cycle, 2);
+  EXPECT_FALSE(p.a3c.network.predicate_inputs);
+  EXPECT_FALSE(p.a3c.network.mask_finished);
+  EXPECT_EQ(p.expert_stop.eval_interval_steps, 5000) << "once per epoch";
+  EXPECT_FALSE(effective_ddpg(preset_spec(p, "retract")).learn_gripper);
+}
+
+// ours+demos is ours and demonstrations, nothing else, and says so.
+TEST(Preset, OursWithDemonstrationsDiffersFromOursOnlyInItsDemonstrations) {
+  const Preset& ours = find_preset("ours", "preset");
+  const Preset& demos = find_preset("ours+demos", "preset");
+  EXPECT_TRUE(demos.uses_demonstrations);
+  EXPECT_GT(demos.ddpg.demo_episodes, 0);
+  for (const char* role : kRoles) {
+    nlohmann::json a = to_json(preset_spec(ours, role));
+    nlohmann::json b = to_json(preset_spec(demos, role));
+    for (auto* j : {&a, &b}) {
+      j->erase("preset");
+      for (const char* key : {"demo_episodes", "demo_pretrain_updates", "demo_bc_weight"})
+        (*j)["ddpg"].erase(key);
+    }
+    EXPECT_EQ(a, b) << role;
+  }
+  EXPECT_EQ(to_json(demos)["uses_demonstrations"], true);
+  EXPECT_EQ(to_json(ours)["uses_demonstrations"], false);
+}
+
+TEST(Preset, AnUnknownNameIsRefusedNamingTheFieldAndTheNames) {
+  try {
+    find_preset("fast", "--preset");
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_STREQ(e.what(),
+                 "--preset: expected one of [\"paper\",\"ours\",\"ours+demos\"], got \"fast\"");
+  }
+}
+
+}  // namespace
+}  // namespace pnp::training
