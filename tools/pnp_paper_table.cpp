@@ -82,6 +82,10 @@ int main(int argc, char** argv) {
   bool fresh_eval_scenes = true;
   app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", fresh_eval_scenes,
                "new evaluation scenes at every evaluation (default), or the same ones every time");
+  app.add_flag("--predicate-inputs,!--no-predicate-inputs", s.a3c.network.predicate_inputs,
+               "the choreographer sees the three subtask predicates [preset]");
+  app.add_flag("--mask-finished,!--no-mask-finished", s.a3c.network.mask_finished,
+               "finished subtasks cannot be chosen by the choreographer [preset]");
   app.add_option("--threads", s.threads, "worker threads (0: all cores)");
   app.add_option("--out", out_dir,
                  "where RESULTS.md and results/ go (docs: replace the committed results)")

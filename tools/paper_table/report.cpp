@@ -92,8 +92,9 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
                                           : "no demonstrations, as in the paper");
   md += fmt::format(
       "Settings: each subtask expert trained after {} (docs/LEARNING.md), to {:.0f}% task "
-      "success; DDPG+HER {} x {}, batch {}, {}; demonstrations {} episodes; choreographer A3C "
-      "with {} workers, learning rate {}, discount {} per environment step, entropy {}.\n\n",
+      "success; DDPG+HER {} x {}, batch {}, {}; {} gripper; demonstrations {} episodes; "
+      "choreographer A3C with {} workers, learning rate {}, discount {} per environment step, "
+      "entropy {}, {}, {}.\n\n",
       c.settings.chained ? "the learned experts before it (chained)"
                          : "scripted experts before it (as in the paper)",
       100 * c.settings.expert_stop.target_success, c.settings.ddpg.hidden.size(),
@@ -104,8 +105,13 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
                         c.settings.ddpg.updates_per_transition)
           : fmt::format("{} gradient steps per cycle of {} episodes",
                         c.settings.ddpg.updates_per_cycle, c.settings.ddpg.episodes_per_cycle),
-      c.settings.ddpg.demo_episodes, c.settings.a3c.workers, c.settings.a3c.learning_rate,
-      c.settings.a3c.gamma, c.settings.a3c.entropy_weight);
+      c.settings.ddpg.learn_gripper ? "learned" : "scripted", c.settings.ddpg.demo_episodes,
+      c.settings.a3c.workers, c.settings.a3c.learning_rate, c.settings.a3c.gamma,
+      c.settings.a3c.entropy_weight,
+      c.settings.a3c.network.predicate_inputs ? "the subtask predicates as inputs"
+                                              : "observation and goal only as inputs",
+      c.settings.a3c.network.mask_finished ? "finished subtasks masked out"
+                                           : "every subtask choosable at every decision");
   md += fmt::format(
       "BC experts are trained DAgger-style, as in the original code: the learner acts (with the "
       "same exploration noise as DDPG+HER) and every state it visits is labelled with the "

@@ -87,6 +87,33 @@ TEST(RunManager, TrainsARunToItsCapRecordingEveryEvaluationWithItsCheckpoint) {
   EXPECT_EQ(run.spec.code_commit, "test");
 }
 
+// The steps a run reports are the steps of the checkpoint that goes downstream (its latest:
+// what the pipeline promotes and the next expert or the choreographer consumes).
+TEST(RunManager, StepsToTargetAreTheConsumedCheckpointsSteps) {
+  ScratchDir dir("run_manager_steps_to_target");
+  RunManager manager({dir.file("pnp.db"), "approach", "test", 2});
+  // SubtaskTraining.ApproachExpertLearnsWithinASmallBudget's run (90% within 6000 steps
+  // there), to a lower target: reached on every machine, twice in a row.
+  TrainingSpec spec = small_spec("approach", 6000);
+  spec.seed = 7;
+  spec.ddpg.hidden = {64, 64};
+  spec.ddpg.demo_episodes = 0;
+  spec.ddpg.updates_per_transition = 0;
+  spec.ddpg.updates_per_cycle = 20;
+  spec.stop.eval_interval_steps = 500;
+  spec.stop.eval_episodes = 30;
+  spec.stop.target_success = 0.6;
+  const auto created = manager.create(spec, {});
+  wait_until(manager, [&] { return store::is_terminal(manager.get(created.id).state); });
+  const auto run = manager.get(created.id);
+  ASSERT_EQ(run.state, store::RunState::kSucceeded) << run.error;
+  ASSERT_TRUE(run.reached) << "the small run did not reach 0.6 twice within 6000 steps";
+  const auto checkpoints = manager.checkpoints(run.id);
+  ASSERT_FALSE(checkpoints.empty());
+  EXPECT_EQ(run.steps_to_target, std::optional<long long>(checkpoints.back().env_steps));
+  EXPECT_EQ(run.env_steps, checkpoints.back().env_steps) << "it stopped at the confirming one";
+}
+
 TEST(RunManager, RefusalsStoreNothing) {
   ScratchDir dir("run_manager_refusals");
   RunManager manager({dir.file("pnp.db"), "manipulate", "test", 1});
