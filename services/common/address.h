@@ -13,4 +13,8 @@ namespace pnp::services {
 // addresses pass as they are.
 void validate_address(std::string_view address, std::string_view field);
 
+// Why a server could not listen on a host:port address, found by binding a socket there
+// the way gRPC does (e.g. "Address already in use"); empty if such a bind now succeeds.
+std::string listen_failure_reason(std::string_view address);
+
 }  // namespace pnp::services

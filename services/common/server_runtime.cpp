@@ -32,6 +32,9 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   builder.AddListeningPort(config.address, grpc::InsecureServerCredentials(), &port_);
+  // Off: with SO_REUSEPORT a second server on a port in use binds too, and the kernel then
+  // spreads the clients over two servers (two stores, two policies).
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   for (grpc::Service* s : config.services) builder.RegisterService(s);
@@ -42,7 +45,9 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   }
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
-    throw Error(ErrorCode::kUnavailable, "cannot listen on " + config.address);
+    const std::string reason = listen_failure_reason(config.address);
+    throw Error(ErrorCode::kUnavailable,
+                "cannot listen on " + config.address + (reason.empty() ? "" : ": " + reason));
   }
   set_serving(true);
 }

@@ -46,6 +46,28 @@ TEST(ServerProcess, SimServerServesAndDrainsOnSigterm) {
   EXPECT_TRUE(status->ok()) << server.diagnostics();
 }
 
+// A second server on a port in use must not bind too (gRPC's SO_REUSEPORT would let it,
+// and clients would then alternate between the two): it exits non-zero saying why.
+TEST(ServerProcess, ASecondServerOnAPortInUseExitsNamingIt) {
+  TempDir dir("port_in_use");
+  ChildProcess first("first", {PNP_BIN_DIR "/pnp-sim-server", "--address", "127.0.0.1:0"},
+                     dir.path());
+  const int port = first.port();
+  ASSERT_GT(port, 0) << first.diagnostics();
+  const std::string address = "127.0.0.1:" + std::to_string(port);
+  ChildProcess second("second", {PNP_BIN_DIR "/pnp-sim-server", "--address", address}, dir.path());
+  const auto ended = second.wait(30s);
+  ASSERT_TRUE(ended) << "the second server is still running: " << second.diagnostics();
+  EXPECT_TRUE(ended->exited && ended->code != 0) << ended->describe();
+  EXPECT_NE(second.stderr_text().find("cannot listen on " + address + ": Address already in use"),
+            std::string::npos)
+      << second.diagnostics();
+  EXPECT_TRUE(first.running()) << "the first server must keep serving";
+  const auto status = first.terminate_and_wait();
+  ASSERT_TRUE(status) << first.diagnostics();
+  EXPECT_TRUE(status->ok()) << first.diagnostics();
+}
+
 TEST(ServerProcess, InferenceServerStartsOnAnEmptyStoreAndDrains) {
   TempDir dir("inference_server");
   {
