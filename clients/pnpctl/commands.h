@@ -36,6 +36,9 @@ struct TrainArgs {
 train::v1::CreateTrainingRunRequest make_request(const TrainArgs& args);
 
 int train_command(const Endpoints& endpoints, const TrainArgs& args);
+// Cancels a pending or running run, found through `via`'s service (any role: they share
+// the store) and cancelled by its own role's service.
+int cancel_command(const Endpoints& endpoints, std::int64_t run_id, const std::string& via);
 // role empty: every role's service that answers.
 int runs_command(const Endpoints& endpoints, const std::string& role, const std::string& state,
                  int limit, bool csv);

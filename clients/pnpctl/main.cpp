@@ -90,6 +90,15 @@ int main(int argc, char** argv) {
   train_cmd->add_flag("--detach", train.detach, "return once the run is created");
   train_cmd->callback([&] { command = [&] { return train_command(endpoints, train); }; });
 
+  std::int64_t cancel_run = 0;
+  std::string cancel_via = "approach";
+  auto* cancel_cmd = app.add_subcommand("cancel", "cancel a pending or running training run");
+  cancel_cmd->add_option("RUN", cancel_run, "run id")->required();
+  cancel_cmd->add_option("--via", cancel_via, "training service to look the run up on")
+      ->capture_default_str();
+  cancel_cmd->callback(
+      [&] { command = [&] { return cancel_command(endpoints, cancel_run, cancel_via); }; });
+
   std::string role, state;
   int limit = 20;
   bool csv = false;

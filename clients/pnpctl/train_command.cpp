@@ -1,4 +1,11 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <thread>
 
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/rpc.h"
@@ -30,6 +37,62 @@ train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
   return r;
 }
 
+namespace {
+
+// What Ctrl-C during the watch prints: the run is the server's, and goes on. A signal
+// handler cannot be handed state, so the line lives here (written once, before the watch).
+std::array<char, 160> interrupt_message{};
+std::size_t interrupt_message_size = 0;
+
+void on_interrupt(int) {
+  [[maybe_unused]] const auto written =
+      ::write(STDERR_FILENO, interrupt_message.data(), interrupt_message_size);
+  ::_exit(130);
+}
+
+void explain_interrupt(std::int64_t run_id) {
+  const int n = std::snprintf(interrupt_message.data(), interrupt_message.size(),
+                              "\npnpctl: stopped watching; run %lld goes on on the server "
+                              "(pnpctl cancel %lld stops it)\n",
+                              static_cast<long long>(run_id), static_cast<long long>(run_id));
+  interrupt_message_size = static_cast<std::size_t>(std::max(n, 0));
+  std::signal(SIGINT, on_interrupt);
+}
+
+}  // namespace
+
+int cancel_command(const Endpoints& endpoints, std::int64_t run_id, const std::string& via) {
+  // Any training service reads the shared store; the run's own role's service owns it.
+  train::v1::GetTrainingRunRequest get;
+  get.set_run_id(run_id);
+  train::v1::GetTrainingRunResponse found;
+  const std::string& reader = endpoints.training(via);
+  check(train::v1::TrainingService::NewStub(channel(reader))
+            ->GetTrainingRun(context_with_deadline().get(), get, &found),
+        "GetTrainingRun", reader);
+  const std::string& owner = endpoints.training(short_name(found.run().role()));
+  auto stub = train::v1::TrainingService::NewStub(channel(owner));
+  train::v1::CancelTrainingRunRequest request;
+  request.set_run_id(run_id);
+  train::v1::CancelTrainingRunResponse cancelled;
+  check(stub->CancelTrainingRun(context_with_deadline().get(), request, &cancelled),
+        "CancelTrainingRun", owner);
+  // A running run stops at its next round of rollouts and updates: wait for that.
+  train::v1::TrainingRun run = cancelled.run();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (run.state() == train::v1::RUN_STATE_RUNNING &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    check(stub->GetTrainingRun(context_with_deadline().get(), get, &found), "GetTrainingRun",
+          owner);
+    run = found.run();
+  }
+  std::printf("run %lld (%s) %s at %lld steps\n", static_cast<long long>(run_id),
+              short_name(run.role()).c_str(), short_name(run.state()).c_str(),
+              static_cast<long long>(run.env_steps()));
+  return run.state() == train::v1::RUN_STATE_CANCELLED ? 0 : 1;
+}
+
 int train_command(const Endpoints& endpoints, const TrainArgs& args) {
   const std::string& address = endpoints.training(args.role);
   const auto request = make_request(args);
@@ -40,6 +103,7 @@ int train_command(const Endpoints& endpoints, const TrainArgs& args) {
   std::printf("run %lld created (%s)\n", static_cast<long long>(created.run().run_id()),
               short_name(created.run().state()).c_str());
   if (args.detach) return 0;
+  explain_interrupt(created.run().run_id());
   const auto run = watch_run(address, created.run().run_id(), {args.quiet, stderr});
   std::printf(
       "run %lld %s: %lld steps, success %.2f, %s, latest checkpoint %lld\n",

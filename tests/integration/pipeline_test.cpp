@@ -16,6 +16,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/integration/child_process.h"
@@ -351,6 +352,53 @@ TEST(Pipeline, PnpctlReportsTheServicesRefusalsAndNothingIsStored) {
   const StoreReader store(dir.file("pnp.db"));
   EXPECT_EQ(store.integer("SELECT COUNT(*) FROM runs"), 0);
   EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
+}
+
+// A detached run is cancelled by id: pnpctl finds its role through any training service
+// and asks that role's service; Ctrl-C on a watching `pnpctl train` says how.
+TEST(Pipeline, PnpctlCancelStopsARunAndCtrlCSaysHow) {
+  TempDir dir("pnpctl_cancel");
+  ChildProcess trainer("train-retract", train_server("retract", dir.file("pnp.db")), dir.path());
+  ChildProcess reader("train-approach", train_server("approach", dir.file("pnp.db")), dir.path());
+  const int port = trainer.port(), reader_port = reader.port();
+  ASSERT_GT(port, 0) << trainer.diagnostics();
+  ASSERT_GT(reader_port, 0) << reader.diagnostics();
+  const std::vector<std::string> endpoints{"--retract", loopback(port), "--approach",
+                                           loopback(reader_port)};
+  auto with = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), endpoints.begin(), endpoints.end());
+    return args;
+  };
+  const CliResult created =
+      run_pnpctl(dir, "create",
+                 with({"train", "--role", "retract", "--max-steps", "500000", "--detach"}), 60s);
+  ASSERT_TRUE(created.status && created.status->ok()) << created.err;
+  EXPECT_NE(created.out.find("run 1 created"), std::string::npos) << created.out;
+  const CliResult cancelled = run_pnpctl(dir, "cancel", with({"cancel", "1"}), 60s);
+  ASSERT_TRUE(cancelled.status && cancelled.status->ok()) << cancelled.err;
+  EXPECT_NE(cancelled.out.find("run 1 (retract) cancelled"), std::string::npos) << cancelled.out;
+  const CliResult again = run_pnpctl(dir, "cancel-again", with({"cancel", "1"}), 60s);
+  ASSERT_TRUE(again.status);
+  EXPECT_NE(again.status->describe(), "exit 0") << "a finished run cannot be cancelled twice";
+
+  std::vector<std::string> watch{bin("pnpctl")};
+  for (const auto& a : with({"train", "--role", "retract", "--max-steps", "500000", "--quiet"}))
+    watch.push_back(a);
+  ChildProcess watching("watch", watch, dir.path());
+  for (int i = 0; i < 200 && watching.stdout_text().find("created") == std::string::npos; ++i)
+    std::this_thread::sleep_for(50ms);
+  watching.send_signal(SIGINT);
+  const auto ended = watching.wait(30s);
+  ASSERT_TRUE(ended) << watching.diagnostics();
+  EXPECT_EQ(ended->describe(), "exit 130");
+  EXPECT_NE(watching.stderr_text().find("run 2 goes on on the server (pnpctl cancel 2 stops it)"),
+            std::string::npos)
+      << watching.diagnostics();
+  const CliResult stop =
+      run_pnpctl(dir, "cancel-2", with({"cancel", "2", "--via", "retract"}), 60s);
+  EXPECT_TRUE(stop.status && stop.status->ok()) << stop.err;
+  expect_clean_exit(trainer);
+  expect_clean_exit(reader);
 }
 
 }  // namespace
