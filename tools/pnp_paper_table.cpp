@@ -82,6 +82,8 @@ int main(int argc, char** argv) {
   bool fresh_eval_scenes = true;
   app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", fresh_eval_scenes,
                "new evaluation scenes at every evaluation (default), or the same ones every time");
+  app.add_option("--hlc-gamma", s.a3c.gamma, "the choreographer's discount per environment step")
+      ->capture_default_str();
   app.add_flag("--predicate-inputs,!--no-predicate-inputs", s.a3c.network.predicate_inputs,
                "the choreographer sees the three subtask predicates [preset]");
   app.add_flag("--mask-finished,!--no-mask-finished", s.a3c.network.mask_finished,
@@ -109,6 +111,7 @@ int main(int argc, char** argv) {
       s.held_out_episodes = 500;
     }
     s.ddpg.validate();
+    s.a3c.validate();
     s.expert_stop = preset.expert_stop;
     s.hlc_stop = preset.hlc_stop;
     s.e2e_stop = preset.e2e_stop;
