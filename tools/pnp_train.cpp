@@ -184,6 +184,32 @@ nlohmann::json train(Options& o) {
   return summary;
 }
 
+// What a person reads: the outcome in two lines (--json prints the whole object).
+void print_summary(const Options& o, const nlohmann::json& s) {
+  const double target = o.spec.stop.target_success;
+  const double wall = s.at("wall_s").get<double>() - s.at("eval_wall_s").get<double>();
+  if (s.at("reached").get<bool>()) {
+    std::printf(
+        "%s: reached %.2f twice in a row at %lld training steps (score %.2f), %.1f s of "
+        "training\n",
+        o.spec.role.c_str(), target, s.at("steps_to_target").get<long long>(),
+        s.at("final_score").get<double>(), wall);
+  } else {
+    std::printf(
+        "%s: target %.2f NOT reached: score %.2f at %lld training steps%s, %.1f s of "
+        "training\n",
+        o.spec.role.c_str(), target, s.at("final_score").get<double>(),
+        s.at("train_env_steps").get<long long>(),
+        s.at("cancelled").get<bool>() ? " (cancelled)" : " (the step cap)", wall);
+  }
+  std::printf(
+      "  preset %s, %s, %s/%s, seed %llu, GEMM path %s; checkpoint %s (the whole result: "
+      "%s/%s.json, or --json)\n",
+      o.preset.c_str(), o.spec.algorithm.c_str(), o.robot.c_str(), o.object.c_str(),
+      static_cast<unsigned long long>(o.spec.seed), s.at("gemm_path").get<std::string>().c_str(),
+      s.at("checkpoint").get<std::string>().c_str(), o.out.c_str(), o.spec.role.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -217,7 +243,7 @@ int main(int argc, char** argv) {
                  "or comma-separated checkpoints")
       ->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores)");
-  app.add_flag("--json", o.json, "print the result as one JSON object");
+  app.add_flag("--json", o.json, "print the whole result as one JSON object");
   app.add_flag("--quiet", o.quiet, "no progress lines on stderr");
   add_ddpg_options(app, o);
   app.add_option("--workers", o.spec.a3c.workers,
@@ -239,6 +265,10 @@ int main(int argc, char** argv) {
     o.spec.validate();
     nn::active_gemm_path();  // a bad PNP_GEMM is refused before any work
     const nlohmann::json summary = train(o);
-    std::cout << (o.json ? summary.dump() : summary.dump(2)) << "\n";
+    if (o.json) {
+      std::cout << summary.dump() << "\n";
+    } else {
+      print_summary(o, summary);
+    }
   });
 }

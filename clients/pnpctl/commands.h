@@ -44,6 +44,9 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
                  int limit, bool csv);
 int metrics_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
                     bool csv);
+// A run's checkpoints, oldest first; the last is the one a pipeline promotes.
+int checkpoints_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
+                        bool csv);
 int plot_command(const Endpoints& endpoints, const std::string& role,
                  const std::vector<std::int64_t>& run_ids, const std::string& out);
 int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);

@@ -1,4 +1,4 @@
-// runs, metrics and plot: reading what the training services have stored.
+// runs, checkpoints, metrics and plot: reading what the training services have stored.
 #include <fstream>
 
 #include "clients/pnpctl/commands.h"
@@ -59,6 +59,27 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
                  run.reached() ? std::to_string(run.steps_to_target()) : "-",
                  std::to_string(run.latest_checkpoint_id()), run.error()});
     }
+  }
+  csv ? table.print_csv(stdout) : table.print(stdout);
+  return 0;
+}
+
+int checkpoints_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
+                        bool csv) {
+  const std::string& address = endpoints.training(role);
+  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  train::v1::ListCheckpointsRequest request;
+  request.set_run_id(run_id);
+  train::v1::ListCheckpointsResponse response;
+  check(stub->ListCheckpoints(context_with_deadline().get(), request, &response), "ListCheckpoints",
+        address);
+  Table table({"checkpoint", "run", "role", "env_steps", "eval_success", "size_bytes", "latest"});
+  const int n = response.checkpoints_size();
+  for (int i = 0; i < n; ++i) {
+    const auto& c = response.checkpoints(i);
+    table.add({std::to_string(c.checkpoint_id()), std::to_string(c.run_id()), short_name(c.role()),
+               std::to_string(c.env_steps()), fixed(c.eval_success(), 3),
+               std::to_string(c.size_bytes()), i == n - 1 ? "latest" : ""});
   }
   csv ? table.print_csv(stdout) : table.print(stdout);
   return 0;

@@ -120,6 +120,15 @@ int main(int argc, char** argv) {
   metrics_cmd->callback(
       [&] { command = [&] { return metrics_command(endpoints, metrics_role, run_id, csv); }; });
 
+  auto* checkpoints_cmd =
+      app.add_subcommand("checkpoints", "list a run's checkpoints (the ids promote takes)");
+  checkpoints_cmd->add_option("RUN", run_id, "run id")->required();
+  checkpoints_cmd->add_option("--via", metrics_role, "training service to ask")
+      ->capture_default_str();
+  checkpoints_cmd->add_flag("--csv", csv, "comma-separated output");
+  checkpoints_cmd->callback(
+      [&] { command = [&] { return checkpoints_command(endpoints, metrics_role, run_id, csv); }; });
+
   std::vector<std::int64_t> plot_runs;
   std::string plot_out = "learning_curves.svg";
   auto* plot_cmd = app.add_subcommand("plot", "draw learning curves as SVG");

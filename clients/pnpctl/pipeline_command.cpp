@@ -122,6 +122,7 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   Table table({"role", "run", "steps", "to_target", "final_success", "wall", "checkpoint"});
   long long total_steps = 0;
   double total_wall = 0;
+  int not_reached = 0;
   nlohmann::json json_roles = nlohmann::json::array();
   for (const auto& r : results) {
     const auto& run = r.run;
@@ -129,6 +130,7 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
     const long long steps = run.reached() ? run.steps_to_target() : run.env_steps();
     total_steps += steps;
     total_wall += r.wall_s;
+    not_reached += run.reached() ? 0 : 1;
     table.add({short_name(run.role()), std::to_string(run.run_id()),
                std::to_string(run.env_steps()),
                run.reached() ? std::to_string(run.steps_to_target()) : "not reached",
@@ -144,7 +146,11 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
                           {"wall_s", r.wall_s},
                           {"checkpoint_id", run.latest_checkpoint_id()}});
   }
-  table.add({"total", "", "", std::to_string(total_steps), "", fixed(total_wall, 1) + " s", ""});
+  // A part that did not reach its target adds all the steps it spent: the total says so.
+  table.add({"total", "", "",
+             std::to_string(total_steps) +
+                 (not_reached ? " (" + std::to_string(not_reached) + " not reached)" : ""),
+             "", fixed(total_wall, 1) + " s", ""});
   std::printf("\n");
   table.print(stdout);
   std::printf("\nheld-out through the services: success %.3f over %d episodes (seed %llu)",

@@ -19,8 +19,12 @@ int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id) {
   policy::v1::PromoteCheckpointResponse response;
   check(stub->PromoteCheckpoint(context_with_deadline().get(), request, &response),
         "PromoteCheckpoint", endpoints.inference);
-  std::printf("checkpoint %lld now serves %s\n", static_cast<long long>(response.checkpoint_id()),
-              short_name(response.role()).c_str());
+  std::printf("checkpoint %lld now serves %s (run %lld, %lld training steps, %s)\n",
+              static_cast<long long>(response.checkpoint_id()), short_name(response.role()).c_str(),
+              static_cast<long long>(response.run_id()),
+              static_cast<long long>(response.env_steps()),
+              response.latest_of_run() ? "the run's latest checkpoint"
+                                       : "NOT the run's latest: an intermediate model");
   return 0;
 }
 

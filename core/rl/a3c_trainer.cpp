@@ -300,7 +300,8 @@ HlcTrainingOutput train_choreographer(
           point.updates = first_ticket + ticket + 1;
           point.eval_wall_s = result.eval_wall_s;
           while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
-          const bool finished = stop.record(point, point.task_success, result);
+          point.stop_score = point.task_success;
+          const bool finished = stop.record(point, point.stop_score, result);
           if (config.on_evaluation) config.on_evaluation(point, *shared);
           if (progress) progress(point);
           if (finished) {

@@ -261,8 +261,8 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     loss_sum_critic = loss_sum_actor = 0;
     updates_since_eval = 0;
     while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
-    const bool done =
-        stop.record(point, expert_stop_score(point, config.subtask, end_to_end), result);
+    point.stop_score = expert_stop_score(point, config.subtask, end_to_end);
+    const bool done = stop.record(point, point.stop_score, result);
     if (config.on_evaluation) config.on_evaluation(point, *agent);
     if (progress) progress(point);
     if (done) break;

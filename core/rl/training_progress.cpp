@@ -25,7 +25,9 @@ void StopRule::validate() const {
 
 bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& result) {
   result.curve.push_back(point);
+  result.curve.back().stop_score = score;
   result.final_success = point.task_success;
+  result.final_score = score;
   streak_ = score >= rule_.target_success ? streak_ + 1 : 0;
   if (streak_ >= rule_.consecutive) {
     result.reached = true;

@@ -22,8 +22,11 @@ struct CurvePoint {
   double subtask_success = 0;     // the trained subtask's predicate fired (experts only)
   double subtask_mean_steps = 0;  // steps the trained subtask ran, mean (experts only)
   double sampled_success = 0;     // choreographer: its training episodes (sampled choices)
-  std::string detail;             // choreographer: the most frequent greedy sequence
-  double critic_loss = 0;         // mean over the last interval's updates
+  // What the stop rule compares with the target: task success, or for approach and
+  // manipulate the lower of task and subtask success.
+  double stop_score = 0;
+  std::string detail;      // choreographer: the most frequent greedy sequence
+  double critic_loss = 0;  // mean over the last interval's updates
   double actor_loss = 0;
   long long updates = 0;
 };
@@ -50,7 +53,8 @@ struct TrainingResult {
   bool reached = false;
   bool cancelled = false;          // stopped by TrainingControl::stop before its rule
   long long steps_to_target = -1;  // -1: not reached
-  double final_success = 0;        // last evaluation
+  double final_success = 0;        // last evaluation: task success
+  double final_score = 0;          // last evaluation: the stop rule's score
   long long train_env_steps = 0;
   long long train_episodes = 0;
   long long eval_env_steps = 0;  // spent on evaluation: not counted in training

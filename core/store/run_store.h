@@ -53,6 +53,7 @@ class RunStore {
   Checkpoint load_checkpoint(std::int64_t checkpoint_id);  // verified, or DATA_LOSS
   std::optional<CheckpointInfo> latest_checkpoint(std::int64_t run_id);
   std::vector<CheckpointInfo> checkpoints(std::int64_t run_id);
+  CheckpointInfo checkpoint_info(std::int64_t checkpoint_id);  // no blob; NOT_FOUND if none
 
   // The checkpoint serves its role from now on (replacing the role's previous one).
   Promotion promote(std::int64_t checkpoint_id);
@@ -62,7 +63,6 @@ class RunStore {
   Database& database() { return db_; }
 
  private:
-  CheckpointInfo checkpoint_info(std::int64_t checkpoint_id);
   void insert_metric(std::int64_t run_id, const MetricPoint& point, bool reached,
                      std::optional<long long> steps_to_target);
   std::int64_t insert_checkpoint(std::int64_t run_id, long long env_steps, double eval_success,

@@ -12,6 +12,7 @@ nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
                    {"subtask_success", p.subtask_success},
                    {"subtask_mean_steps", p.subtask_mean_steps},
                    {"sampled_success", p.sampled_success},
+                   {"stop_score", p.stop_score},
                    {"detail", p.detail},
                    {"critic_loss", p.critic_loss},
                    {"actor_loss", p.actor_loss},
@@ -23,8 +24,10 @@ nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
 nlohmann::json result_json(const rl::TrainingResult& r) {
   return {
       {"reached", r.reached},
+      {"cancelled", r.cancelled},
       {"steps_to_target", r.reached ? nlohmann::json(r.steps_to_target) : nlohmann::json(nullptr)},
       {"final_success", r.final_success},
+      {"final_score", r.final_score},
       {"train_env_steps", r.train_env_steps},
       {"train_episodes", r.train_episodes},
       {"eval_steps", r.eval_env_steps},

@@ -108,12 +108,19 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
                              std::to_string(request->checkpoint_id()));
     }
     store::Promotion promotion;
+    store::CheckpointInfo info;
+    std::optional<store::CheckpointInfo> latest;
     {
       std::lock_guard lock(store_mutex_);
       promotion = store_.promote(request->checkpoint_id());
+      info = store_.checkpoint_info(promotion.checkpoint_id);
+      latest = store_.latest_checkpoint(info.run_id);
     }
     response->set_role(role_from_name(promotion.role));
     response->set_checkpoint_id(promotion.checkpoint_id);
+    response->set_run_id(info.run_id);
+    response->set_env_steps(info.env_steps);
+    response->set_latest_of_run(latest && latest->id == info.id);
     // Serve it now if it completes (or changes) the served kind's roles; a role the kind
     // does not use changes nothing, an incomplete hierarchy keeps the old one.
     try {

@@ -377,6 +377,9 @@ TEST(Pipeline, PnpctlCancelStopsARunAndCtrlCSaysHow) {
   const CliResult cancelled = run_pnpctl(dir, "cancel", with({"cancel", "1"}), 60s);
   ASSERT_TRUE(cancelled.status && cancelled.status->ok()) << cancelled.err;
   EXPECT_NE(cancelled.out.find("run 1 (retract) cancelled"), std::string::npos) << cancelled.out;
+  const CliResult listed = run_pnpctl(dir, "checkpoints", with({"checkpoints", "1"}), 60s);
+  ASSERT_TRUE(listed.status && listed.status->ok()) << listed.err;
+  EXPECT_EQ(listed.out.rfind("checkpoint  run  role", 0), 0u) << listed.out;
   const CliResult again = run_pnpctl(dir, "cancel-again", with({"cancel", "1"}), 60s);
   ASSERT_TRUE(again.status);
   EXPECT_NE(again.status->describe(), "exit 0") << "a finished run cannot be cancelled twice";

@@ -231,6 +231,19 @@ TEST_F(PolicyServiceTest, NothingPromotedIsAFailedPreconditionThenServesOnceProm
   r.set_checkpoint_id(store_checkpoint("hlc", choreographer_blob(2)));
   ASSERT_TRUE(stub_->PromoteCheckpoint(&c, r, &out).ok());
   EXPECT_EQ(out.role(), common::v1::ROLE_HLC);
+  EXPECT_EQ(out.env_steps(), 100);
+  EXPECT_GT(out.run_id(), 0);
+  EXPECT_TRUE(out.latest_of_run());
+  // An earlier checkpoint of a run is promoted as asked, and the answer says it is not the
+  // run's latest (a run id typed where a checkpoint id belongs shows up here).
+  const auto run = store_->create_run({"hlc", "a3c", "fetch", "block", 1, "{}", "", std::nullopt});
+  const auto early = store_->save_checkpoint(run.id, 100, 0.5, choreographer_blob(3));
+  store_->save_checkpoint(run.id, 200, 0.9, choreographer_blob(3));
+  grpc::ClientContext c2;
+  r.set_checkpoint_id(early.id);
+  ASSERT_TRUE(stub_->PromoteCheckpoint(&c2, r, &out).ok());
+  EXPECT_EQ(out.run_id(), run.id);
+  EXPECT_FALSE(out.latest_of_run());
   grpc::ClientContext again;
   EXPECT_TRUE(stub_->Predict(&again, valid_request(), &response).ok());
 }

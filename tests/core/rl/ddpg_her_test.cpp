@@ -198,6 +198,8 @@ TEST(StopTracker, StepsToTargetAreThoseOfTheConfirmingEvaluation) {
   EXPECT_TRUE(tracker.record(point(4000), 0.91, result));
   EXPECT_TRUE(result.reached);
   EXPECT_EQ(result.steps_to_target, 4000);
+  EXPECT_EQ(result.curve.back().stop_score, 0.91) << "the curve keeps what the rule compared";
+  EXPECT_EQ(result.final_score, 0.91);
 }
 
 TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
