@@ -1,6 +1,7 @@
 // pnp-inference-server: serves the promoted policy from the store (PolicyService): the
 // hierarchy (choreographer + experts) or, with --policy e2e, the end-to-end baseline.
-//   --address 127.0.0.1:50060  --db ./pnp.db (or $PNP_DB)  --reload-ms 500
+//   --address 127.0.0.1:50060  --db FILE (or $PNP_DB; an existing store unless --create-db)
+//   --reload-ms 500
 //   --policy hierarchy|e2e  [--metrics-address 127.0.0.1:9101]
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,7 @@
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
+#include "services/common/store_path.h"
 #include "services/inference/policy_service.h"
 
 int main(int argc, char** argv) {
@@ -20,7 +22,8 @@ int main(int argc, char** argv) {
   catch_termination_signals();
   CLI::App app{"Serve the promoted pick-and-place policy", "pnp-inference-server"};
   std::string address = "127.0.0.1:50060";
-  std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
+  std::string db;
+  bool create_db = false;
   int reload_ms = 500;
   std::string policy = "hierarchy";
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
@@ -28,7 +31,8 @@ int main(int argc, char** argv) {
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
-  app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
+  app.add_option("--db", db, "SQLite store [$PNP_DB]; it must exist unless --create-db");
+  app.add_flag("--create-db", create_db, "start on an empty store if --db does not exist");
   app.add_option("--reload-ms", reload_ms, "how often to look for newly promoted checkpoints")
       ->check(CLI::Range(10, 60'000))
       ->capture_default_str();
@@ -43,7 +47,7 @@ int main(int argc, char** argv) {
     const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
     MetricsRegistry metrics;
     const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
-    PolicyServiceImpl service(db, kind);
+    PolicyServiceImpl service(resolve_store_path(db, !create_db), kind);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
                            .services = {&service},

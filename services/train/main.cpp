@@ -1,6 +1,7 @@
 // pnp-train-server: trains one role (TrainingService) in the background, writing runs,
 // learning curves and checkpoints to the store; resumes interrupted runs at start.
-//   --role approach  --address 127.0.0.1:50052  --db ./pnp.db (or $PNP_DB)  --threads 0
+//   --role approach  --address 127.0.0.1:50052  --db FILE (or $PNP_DB; created if missing)
+//   --threads 0
 //   [--metrics-address 127.0.0.1:9102]  [--sim-address host:port]...  (rollouts on remote
 //   simulation services, round robin; default: in this process)
 
@@ -17,6 +18,7 @@
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/server_runtime.h"
+#include "services/common/store_path.h"
 #include "services/train/training_service.h"
 
 namespace {
@@ -59,12 +61,12 @@ int main(int argc, char** argv) {
                                                  {"hlc", 50055},
                                                  {"e2e", 50056}};
   std::string role, address;
-  std::string db = std::getenv("PNP_DB") ? std::getenv("PNP_DB") : "pnp.db";
+  std::string db;
   std::size_t threads = 0;
   app.add_option("--role", role, "approach, manipulate, retract, hlc or e2e")->required();
   app.add_option("--address", address,
                  "host:port to listen on (port 0: any free port) [127.0.0.1:5005x by role]");
-  app.add_option("--db", db, "SQLite store (also $PNP_DB)")->capture_default_str();
+  app.add_option("--db", db, "SQLite store, created if missing [$PNP_DB]");
   app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
   std::vector<std::string> sim_addresses;
   app.add_option("--sim-address", sim_addresses,
@@ -86,6 +88,7 @@ int main(int argc, char** argv) {
   try {
     // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
     const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
+    db = resolve_store_path(db, false);
     MetricsRegistry metrics;
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {

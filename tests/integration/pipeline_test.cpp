@@ -146,8 +146,10 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
     }
     trainers[role] = std::make_unique<ChildProcess>("train-" + role, args, dir.path());
   }
-  ChildProcess inference(  // the store from $PNP_DB, without --db
-      "inference", {bin("pnp-inference-server"), "--address", "127.0.0.1:0", "--reload-ms", "100"},
+  ChildProcess inference(  // the store from $PNP_DB, without --db; it may start first
+      "inference",
+      {bin("pnp-inference-server"), "--address", "127.0.0.1:0", "--reload-ms", "100",
+       "--create-db"},
       dir.path(), {{"PNP_DB", db}});
   for (const auto& role : kRoles) {
     ports[role] = trainers[role]->port();

@@ -73,7 +73,7 @@ TEST(ServerProcess, InferenceServerStartsOnAnEmptyStoreAndDrains) {
   {
     ChildProcess server("inference",
                         {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db",
-                         dir.file("pnp.db")},
+                         dir.file("pnp.db"), "--create-db"},
                         dir.path());
     const int port = server.port();
     ASSERT_GT(port, 0) << server.diagnostics();
@@ -109,7 +109,7 @@ TEST(ServerProcess, ServicesStartedTogetherOnANewStoreAllServe) {
     servers.push_back(std::make_unique<ChildProcess>(
         "inference",
         std::vector<std::string>{PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0",
-                                 "--db", db},
+                                 "--db", db, "--create-db"},
         dir.path()));
     for (auto& server : servers) EXPECT_GT(server->port(), 0) << server->diagnostics();
     // Killed, not stopped: a SIGTERM this early can hit the signal gap pinned below.
