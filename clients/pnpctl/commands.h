@@ -61,8 +61,11 @@ int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 // 0 when every one is SERVING.
 int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
                    double timeout_s);
+// Warns (strict: refuses, FAILED_PRECONDITION) when a served role was trained on another
+// robot or object than the evaluation's.
 int evaluate_command(const Endpoints& endpoints, const std::string& robot,
-                     const std::string& object, int episodes, std::uint64_t seed, bool json);
+                     const std::string& object, int episodes, std::uint64_t seed, bool json,
+                     bool strict);
 
 struct PipelineArgs {
   TrainArgs experts;  // role ignored; applied to approach, manipulate and retract

@@ -176,8 +176,13 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--robot", robot)->capture_default_str();
   evaluate_cmd->add_option("--object", object)->capture_default_str();
   evaluate_cmd->add_flag("--json", json);
+  bool strict = false;
+  evaluate_cmd->add_flag("--strict", strict,
+                         "refuse when the served policy was trained on another robot or object");
   evaluate_cmd->callback([&] {
-    command = [&] { return evaluate_command(endpoints, robot, object, episodes, eval_seed, json); };
+    command = [&] {
+      return evaluate_command(endpoints, robot, object, episodes, eval_seed, json, strict);
+    };
   });
 
   PipelineArgs pipeline;

@@ -9,6 +9,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "services/common/convert.h"
 
 namespace pnp::pnpctl {
 
@@ -117,8 +118,46 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
   return failures == 0 ? 0 : 1;
 }
 
+namespace {
+
+// The served roles trained on another world than the one to evaluate on, as "hlc
+// (fetch/block)"; empty if none. A mismatch can be deliberate (a retract fine-tuned for
+// another shape), so it is a warning unless --strict.
+std::string served_world_mismatch(const Endpoints& endpoints, const std::string& robot,
+                                  const std::string& object) {
+  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  policy::v1::GetServingStatusResponse status;
+  check(stub->GetServingStatus(context_with_deadline().get(), {}, &status), "GetServingStatus",
+        endpoints.inference);
+  std::string out;
+  for (const auto& r : status.roles()) {
+    if (r.robot() == common::v1::ROBOT_UNSPECIFIED) continue;  // not recorded
+    const std::string served_robot(sim::robot_name(services::from_proto(r.robot(), "robot")));
+    const std::string served_object(sim::object_name(services::from_proto(r.object(), "object")));
+    if (served_robot == robot && served_object == object) continue;
+    out += (out.empty() ? "" : ", ") + short_name(r.role()) + " (" + served_robot + "/" +
+           served_object + ")";
+  }
+  return out;
+}
+
+}  // namespace
+
 int evaluate_command(const Endpoints& endpoints, const std::string& robot,
-                     const std::string& object, int episodes, std::uint64_t seed, bool json) {
+                     const std::string& object, int episodes, std::uint64_t seed, bool json,
+                     bool strict) {
+  // Bad input is refused before any service is asked.
+  parse_robot(robot, "--robot");
+  parse_object(object, "--object");
+  if (episodes <= 0)
+    throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
+  if (const std::string mismatch = served_world_mismatch(endpoints, robot, object);
+      !mismatch.empty()) {
+    const std::string message = "evaluating on " + robot + "/" + object +
+                                ", but the served policy was trained elsewhere: " + mismatch;
+    if (strict) throw Error(ErrorCode::kFailedPrecondition, message);
+    std::fprintf(stderr, "pnpctl: warning: %s\n", message.c_str());
+  }
   const ServiceEvaluation e = evaluate_through_services(
       endpoints, parse_robot(robot, "--robot"), parse_object(object, "--object"), episodes, seed);
   if (json) {

@@ -1,5 +1,8 @@
 #include "store/sqlite.h"
 
+#include <chrono>
+#include <thread>
+
 #include "common/error.h"
 
 namespace pnp::store {
@@ -22,6 +25,23 @@ namespace {
   throw Error(ErrorCode::kInternal, message);
 }
 
+// Switching a new file to WAL needs an exclusive lock, and SQLite does not call the busy
+// handler for it while another connection is creating the same file: the pragma then
+// fails at once with BUSY. Retried here for as long as the busy timeout would wait.
+void enable_wal(sqlite3* db, std::chrono::milliseconds patience) {
+  const auto deadline = std::chrono::steady_clock::now() + patience;
+  for (;;) {
+    const int rc = sqlite3_exec(db, "PRAGMA journal_mode = WAL", nullptr, nullptr, nullptr);
+    if (rc == SQLITE_OK) return;
+    const int primary = rc & 0xff;
+    if ((primary != SQLITE_BUSY && primary != SQLITE_LOCKED) ||
+        std::chrono::steady_clock::now() >= deadline) {
+      fail(db, rc, "setting journal_mode = WAL");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
 }  // namespace
 
 Database::Database(const std::string& path, std::chrono::milliseconds busy_timeout) : path_(path) {
@@ -38,8 +58,7 @@ Database::Database(const std::string& path, std::chrono::milliseconds busy_timeo
     // WAL: readers never block the writer (the training services write metrics while
     // the inference service and clients read). NORMAL sync is durable across process
     // crashes in WAL mode, which is what a killed service needs.
-    auto mode = prepare("PRAGMA journal_mode = WAL");
-    mode.step();
+    enable_wal(raw, busy_timeout);
     execute("PRAGMA synchronous = NORMAL");
   }
 }

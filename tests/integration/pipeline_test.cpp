@@ -189,6 +189,23 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
                                      << pipeline.out << pipeline.err;
   EXPECT_NE(pipeline.out.find("held-out through the services"), std::string::npos) << pipeline.out;
 
+  // The hierarchy was trained on the Fetch arm: evaluating it on the Panda warns, and
+  // --strict refuses.
+  const CliResult other_robot = run_pnpctl(
+      dir, "pnpctl-evaluate-panda", command(words("evaluate --episodes 2 --robot panda")), 120s);
+  ASSERT_TRUE(other_robot.status && other_robot.status->ok()) << other_robot.err;
+  EXPECT_NE(other_robot.err.find("pnpctl: warning: evaluating on panda/block, but the served "
+                                 "policy was trained elsewhere: approach (fetch/block)"),
+            std::string::npos)
+      << other_robot.err;
+  const CliResult strict =
+      run_pnpctl(dir, "pnpctl-evaluate-strict",
+                 command(words("evaluate --episodes 2 --robot panda --strict")), 120s);
+  ASSERT_TRUE(strict.status);
+  EXPECT_EQ(strict.status->describe(), "exit 1") << strict.err;
+  EXPECT_NE(strict.err.find("pnpctl: error: evaluating on panda/block"), std::string::npos)
+      << strict.err;
+
   // The results as JSON.
   const auto results = nlohmann::json::parse(read_file(results_file), nullptr, false);
   ASSERT_FALSE(results.is_discarded()) << read_file(results_file);
@@ -360,10 +377,13 @@ TEST(Pipeline, PnpctlReportsTheServicesRefusalsAndNothingIsStored) {
 // and asks that role's service; Ctrl-C on a watching `pnpctl train` says how.
 TEST(Pipeline, PnpctlCancelStopsARunAndCtrlCSaysHow) {
   TempDir dir("pnpctl_cancel");
+  // One after the other: this test is about cancelling, not about two servers creating
+  // one store at once (ServerProcess.ServicesStartedTogetherOnANewStoreAllServe).
   ChildProcess trainer("train-retract", train_server("retract", dir.file("pnp.db")), dir.path());
-  ChildProcess reader("train-approach", train_server("approach", dir.file("pnp.db")), dir.path());
-  const int port = trainer.port(), reader_port = reader.port();
+  const int port = trainer.port();
   ASSERT_GT(port, 0) << trainer.diagnostics();
+  ChildProcess reader("train-approach", train_server("approach", dir.file("pnp.db")), dir.path());
+  const int reader_port = reader.port();
   ASSERT_GT(reader_port, 0) << reader.diagnostics();
   const std::vector<std::string> endpoints{"--retract", loopback(port), "--approach",
                                            loopback(reader_port)};

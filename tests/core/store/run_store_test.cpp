@@ -3,8 +3,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
 
 #include "common/error.h"
 #include "store/schema.h"
@@ -64,6 +68,35 @@ TEST_F(StoreTest, OpensWithWalForeignKeysAndTheCurrentSchema) {
   EXPECT_EQ(version.column_int(0), schema_version());
   RunStore again(path_);  // migrating an up-to-date database is a no-op
   EXPECT_TRUE(again.list_runs().empty());
+}
+
+// Servers start together on a new file (a Kubernetes Pod, an integration test): every one
+// must open it. Switching a new file to WAL needs an exclusive lock, for which SQLite does
+// not always call the busy handler: a server once died at start with "database is
+// locked". Many rounds of several connections opening one new file at once.
+TEST_F(StoreTest, ConnectionsOpeningOneNewFileAtOnceAllSucceed) {
+  for (int round = 0; round < 60; ++round) {
+    const std::string path = (dir_ / ("new_" + std::to_string(round) + ".db")).string();
+    std::vector<std::thread> threads;
+    std::atomic<int> failures{0};
+    std::string first_failure;
+    std::mutex failure_mutex;
+    for (int k = 0; k < 6; ++k) {
+      threads.emplace_back([&] {
+        try {
+          RunStore store(path);
+          store.list_runs();
+        } catch (const Error& e) {
+          if (failures++ == 0) {
+            std::lock_guard lock(failure_mutex);
+            first_failure = e.what();
+          }
+        }
+      });
+    }
+    for (auto& t : threads) t.join();
+    ASSERT_EQ(failures.load(), 0) << "round " << round << ": " << first_failure;
+  }
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerBuild) {
