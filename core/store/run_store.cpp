@@ -104,7 +104,10 @@ RunRecord RunStore::create_run(const RunSpec& spec) {
 RunRecord RunStore::get_run(std::int64_t id) {
   auto st = db_.prepare(std::string("SELECT ") + kRunColumns + " FROM runs WHERE id = ?");
   st.bind(1, id);
-  if (!st.step()) throw Error(ErrorCode::kNotFound, "run " + std::to_string(id) + " not found");
+  if (!st.step()) {
+    throw Error(ErrorCode::kNotFound,
+                "run " + std::to_string(id) + " not found in store " + db_.path());
+  }
   return read_run(st);
 }
 
@@ -250,7 +253,8 @@ CheckpointInfo RunStore::checkpoint_info(std::int64_t checkpoint_id) {
       db_.prepare(std::string("SELECT ") + kCheckpointColumns + " FROM checkpoints WHERE id = ?");
   st.bind(1, checkpoint_id);
   if (!st.step())
-    throw Error(ErrorCode::kNotFound, "checkpoint " + std::to_string(checkpoint_id) + " not found");
+    throw Error(ErrorCode::kNotFound, "checkpoint " + std::to_string(checkpoint_id) +
+                                          " not found in store " + db_.path());
   return read_checkpoint_info(st);
 }
 

@@ -179,6 +179,12 @@ TEST_F(StoreTest, CheckpointsRoundTripAndACorruptedBlobIsNeverServed) {
   EXPECT_FALSE(store.promoted("retract").has_value());
   EXPECT_EQ(code_of([&] { store.save_checkpoint(run.id, 1, 0, {}); }), ErrorCode::kInvalidArgument);
   EXPECT_EQ(code_of([&] { store.load_checkpoint(12345); }), ErrorCode::kNotFound);
+  // A missing id names the store it was looked up in (a server on the wrong file).
+  try {
+    store.load_checkpoint(12345);
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "checkpoint 12345 not found in store " + path_);
+  }
 }
 
 TEST_F(StoreTest, PromotionNamesTheCheckpointServingEachRole) {
