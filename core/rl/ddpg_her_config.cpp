@@ -59,6 +59,9 @@ void DdpgHerConfig::validate() const {
   require(demo_episodes >= 0, "demo_episodes", "a non-negative integer", demo_episodes);
   require(demo_pretrain_updates >= 0, "demo_pretrain_updates", "a non-negative integer",
           demo_pretrain_updates);
+  require(demo_bc_weight >= 0 && std::isfinite(demo_bc_weight), "demo_bc_weight",
+          "a non-negative number", demo_bc_weight);
+  require(demo_batch_size > 0, "demo_batch_size", "a positive integer", demo_batch_size);
 }
 
 double target_coefficient(const DdpgHerConfig& config, int gradient_steps) {

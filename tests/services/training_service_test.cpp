@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "rl/ddpg_her_agent.h"
@@ -180,6 +181,8 @@ TEST_F(TrainingServiceTest, BadCreateRequestsAreRefusedNamingTheFieldAndStoreNot
        grpc::StatusCode::INVALID_ARGUMENT, "prefix_checkpoint_ids: expected 0 ids"},
       {"experts for an expert", [](auto& r) { r.add_expert_checkpoint_ids(1); },
        grpc::StatusCode::INVALID_ARGUMENT, "expert_checkpoint_ids"},
+      {"NaN cloning weight", [](auto& r) { r.mutable_ddpg()->set_demo_bc_weight(std::nan("")); },
+       grpc::StatusCode::INVALID_ARGUMENT, "demo_bc_weight: expected a non-negative number"},
       {"unknown preset", [](auto& r) { r.set_preset("fast"); }, grpc::StatusCode::INVALID_ARGUMENT,
        "preset: expected one of [\"paper\",\"ours\",\"ours+demos\"], got \"fast\""},
   };

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 
 #include "common/error.h"
@@ -55,6 +56,12 @@ TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   EXPECT_EQ(refusal(c),
             "updates_per_transition: expected a non-negative number (0: updates_per_cycle), got "
             "-0.400000");
+  c = {};
+  c.demo_bc_weight = std::nan("");  // reachable through the training service's request
+  EXPECT_EQ(refusal(c), "demo_bc_weight: expected a non-negative number, got nan");
+  c = {};
+  c.demo_batch_size = 0;
+  EXPECT_EQ(refusal(c), "demo_batch_size: expected a positive integer, got 0.000000");
 }
 
 TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
