@@ -95,11 +95,15 @@ class EnvLease {
 
 }  // namespace
 
+void require_evaluation_episodes(int episodes) {
+  if (episodes <= 0)
+    throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
+}
+
 ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, common::v1::Robot robot,
                                             common::v1::ObjectShape object, int episodes,
                                             std::uint64_t seed) {
-  if (episodes <= 0)
-    throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
+  require_evaluation_episodes(episodes);
   auto sim = sim::v1::SimulationService::NewStub(channel(endpoints.sim));
   auto policy = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
   sim::v1::CreateEnvRequest create;

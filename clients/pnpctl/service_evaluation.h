@@ -24,6 +24,9 @@ struct ServiceEvaluation {
 
 // Episodes are the simulation service's episodes 0..n-1 of one environment created with
 // `seed`: pick a seed no training run used.
+// INVALID_ARGUMENT naming --episodes unless it is positive.
+void require_evaluation_episodes(int episodes);
+
 ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, common::v1::Robot robot,
                                             common::v1::ObjectShape object, int episodes,
                                             std::uint64_t seed);

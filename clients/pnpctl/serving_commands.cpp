@@ -149,8 +149,7 @@ int evaluate_command(const Endpoints& endpoints, const std::string& robot,
   // Bad input is refused before any service is asked.
   parse_robot(robot, "--robot");
   parse_object(object, "--object");
-  if (episodes <= 0)
-    throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
+  require_evaluation_episodes(episodes);
   if (const std::string mismatch = served_world_mismatch(endpoints, robot, object);
       !mismatch.empty()) {
     const std::string message = "evaluating on " + robot + "/" + object +
