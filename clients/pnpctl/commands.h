@@ -47,8 +47,11 @@ int metrics_command(const Endpoints& endpoints, const std::string& role, std::in
 // A run's checkpoints, oldest first; the last is the one a pipeline promotes.
 int checkpoints_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
                         bool csv);
+// Learning curves as SVG: each run's stop score (metric "score") or task success
+// ("success") against its training steps, labelled by role, algorithm and seed.
 int plot_command(const Endpoints& endpoints, const std::string& role,
-                 const std::vector<std::int64_t>& run_ids, const std::string& out);
+                 const std::vector<std::int64_t>& run_ids, const std::string& metric,
+                 const std::string& out);
 int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);
 
 struct PredictArgs {

@@ -28,17 +28,20 @@ const std::string& Endpoints::address_of(const std::string& service) const {
 }
 
 void add_endpoint_options(CLI::App& app, Endpoints& e) {
-  app.add_option("--sim", e.sim, "simulation service address")->capture_default_str();
-  app.add_option("--approach", e.approach, "approach training service")->capture_default_str();
-  app.add_option("--manipulate", e.manipulate, "manipulate training service")
-      ->capture_default_str();
-  app.add_option("--retract", e.retract, "retract training service")->capture_default_str();
-  app.add_option("--hlc", e.hlc, "choreographer training service")->capture_default_str();
-  app.add_option("--e2e", e.e2e, "end-to-end training service")->capture_default_str();
-  app.add_option("--inference", e.inference, "inference service address")->capture_default_str();
-  app.add_option("--robot-controller", e.robot_controller,
-                 "robot controller address (pnp-robot-sim); health --only robot")
-      ->capture_default_str();
+  // Each address also comes from the environment (PNP_SIM_ADDRESS, ...): a shell that
+  // talks to one deployment sets them once; a flag still wins.
+  auto add = [&app](const char* flag, std::string& address, const char* env, const char* what) {
+    app.add_option(flag, address, what)->envname(env)->capture_default_str();
+  };
+  add("--sim", e.sim, "PNP_SIM_ADDRESS", "simulation service address");
+  add("--approach", e.approach, "PNP_APPROACH_ADDRESS", "approach training service");
+  add("--manipulate", e.manipulate, "PNP_MANIPULATE_ADDRESS", "manipulate training service");
+  add("--retract", e.retract, "PNP_RETRACT_ADDRESS", "retract training service");
+  add("--hlc", e.hlc, "PNP_HLC_ADDRESS", "choreographer training service");
+  add("--e2e", e.e2e, "PNP_E2E_ADDRESS", "end-to-end training service");
+  add("--inference", e.inference, "PNP_INFERENCE_ADDRESS", "inference service address");
+  add("--robot-controller", e.robot_controller, "PNP_ROBOT_CONTROLLER_ADDRESS",
+      "robot controller address (pnp-robot-sim); health --only robot");
 }
 
 }  // namespace pnp::pnpctl

@@ -3,6 +3,7 @@
 
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/table.h"
 #include "common/error.h"
 #include "plot/line_chart_svg.h"
@@ -23,11 +24,21 @@ std::vector<train::v1::MetricPoint> fetch_metrics(const std::string& address, st
   return {response.points().begin(), response.points().end()};
 }
 
+train::v1::TrainingRun fetch_run(const std::string& address, std::int64_t id) {
+  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  train::v1::GetTrainingRunRequest request;
+  request.set_run_id(id);
+  train::v1::GetTrainingRunResponse response;
+  check(stub->GetTrainingRun(context_with_deadline().get(), request, &response), "GetTrainingRun",
+        address);
+  return response.run();
+}
+
 }  // namespace
 
 int runs_command(const Endpoints& endpoints, const std::string& role, const std::string& state,
                  int limit, bool csv) {
-  Table table({"run", "role", "algorithm", "seed", "state", "steps", "success", "reached",
+  Table table({"run", "role", "algorithm", "seed", "state", "steps", "score", "target", "success",
                "to_target", "checkpoint", "error"});
   std::vector<std::string> roles;
   if (role.empty()) {
@@ -53,9 +64,8 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
     check(status, "ListTrainingRuns", address);
     for (const auto& run : response.runs()) {
       table.add({std::to_string(run.run_id()), short_name(run.role()), short_name(run.algorithm()),
-                 std::to_string(run.seed()), short_name(run.state()),
-                 std::to_string(run.env_steps()), fixed(run.last_success(), 2),
-                 run.reached() ? "yes" : "no",
+                 std::to_string(run.seed()), outcome_text(run), std::to_string(run.env_steps()),
+                 score_text(run), fixed(run.target_success(), 2), fixed(run.last_success(), 2),
                  run.reached() ? std::to_string(run.steps_to_target()) : "-",
                  std::to_string(run.latest_checkpoint_id()), run.error()});
     }
@@ -87,32 +97,41 @@ int checkpoints_command(const Endpoints& endpoints, const std::string& role, std
 
 int metrics_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
                     bool csv) {
-  Table table({"env_steps", "episodes", "wall_s", "task_success", "subtask_success",
+  Table table({"env_steps", "episodes", "wall_s", "stop_score", "task_success", "subtask_success",
                "sampled_success", "critic_loss", "actor_loss", "updates"});
   for (const auto& p : fetch_metrics(endpoints.training(role), run_id)) {
     table.add({std::to_string(p.env_steps()), std::to_string(p.episodes()), fixed(p.wall_s(), 1),
-               fixed(p.task_success(), 3), fixed(p.subtask_success(), 3),
-               fixed(p.sampled_success(), 3), fixed(p.critic_loss(), 5), fixed(p.actor_loss(), 5),
-               std::to_string(p.updates())});
+               p.has_stop_score() ? fixed(p.stop_score(), 3) : "", fixed(p.task_success(), 3),
+               fixed(p.subtask_success(), 3), fixed(p.sampled_success(), 3),
+               fixed(p.critic_loss(), 5), fixed(p.actor_loss(), 5), std::to_string(p.updates())});
   }
   csv ? table.print_csv(stdout) : table.print(stdout);
   return 0;
 }
 
 int plot_command(const Endpoints& endpoints, const std::string& role,
-                 const std::vector<std::int64_t>& run_ids, const std::string& out) {
+                 const std::vector<std::int64_t>& run_ids, const std::string& metric,
+                 const std::string& out) {
   if (run_ids.empty()) throw_invalid_argument("RUN", "at least one run id", "none");
+  const bool score = metric == "score";
+  if (!score && metric != "success")
+    throw_invalid_argument("--metric", "score or success", "\"" + metric + "\"");
+  const std::string& address = endpoints.training(role);
   std::vector<plot::Series> series;
   for (std::size_t i = 0; i < run_ids.size(); ++i) {
-    plot::Series s{"run " + std::to_string(run_ids[i]), plot::palette_colour(i), {}};
-    for (const auto& p : fetch_metrics(endpoints.training(role), run_ids[i]))
-      s.points.emplace_back(static_cast<double>(p.env_steps()), p.task_success());
+    plot::Series s{series_label(fetch_run(address, run_ids[i])), plot::palette_colour(i), {}};
+    for (const auto& p : fetch_metrics(address, run_ids[i])) {
+      if (score && !p.has_stop_score()) continue;  // stored before the score was kept
+      s.points.emplace_back(static_cast<double>(p.env_steps()),
+                            score ? p.stop_score() : p.task_success());
+    }
     series.push_back(std::move(s));
   }
   plot::ChartSpec spec;
   spec.title = "Learning curves";
   spec.x_label = "training environment steps";
-  spec.y_label = "task success (fresh evaluation episodes)";
+  spec.y_label =
+      score ? "stop score (fresh evaluation episodes)" : "task success (fresh evaluation episodes)";
   std::ofstream file(out);
   if (!file) throw_invalid_argument("--out", "a writable file path", "\"" + out + "\"");
   file << plot::line_chart_svg(spec, series);

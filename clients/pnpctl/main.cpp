@@ -134,9 +134,18 @@ int main(int argc, char** argv) {
   auto* plot_cmd = app.add_subcommand("plot", "draw learning curves as SVG");
   plot_cmd->add_option("RUN", plot_runs, "run ids")->required();
   plot_cmd->add_option("--out", plot_out, "SVG file")->capture_default_str();
+  std::string plot_metric = "score";
+  plot_cmd
+      ->add_option("--metric", plot_metric,
+                   "score (what each run's stop rule compares with its target) or success (task "
+                   "success)")
+      ->check(CLI::IsMember({"score", "success"}))
+      ->capture_default_str();
   plot_cmd->add_option("--via", metrics_role, "training service to ask")->capture_default_str();
   plot_cmd->callback([&] {
-    command = [&] { return plot_command(endpoints, metrics_role, plot_runs, plot_out); };
+    command = [&] {
+      return plot_command(endpoints, metrics_role, plot_runs, plot_metric, plot_out);
+    };
   });
 
   std::int64_t checkpoint_id = 0;

@@ -9,6 +9,7 @@
 
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/run_watch.h"
 #include "clients/pnpctl/service_evaluation.h"
 #include "clients/pnpctl/table.h"
@@ -119,7 +120,8 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
       endpoints, parse_robot(args.experts.robot, "--robot"),
       parse_object(args.experts.object, "--object"), args.eval_episodes, args.eval_seed);
 
-  Table table({"role", "run", "steps", "to_target", "final_success", "wall", "checkpoint"});
+  Table table({"role", "run", "state", "steps", "to_target", "score", "target", "final_success",
+               "wall", "checkpoint"});
   long long total_steps = 0;
   double total_wall = 0;
   int not_reached = 0;
@@ -131,11 +133,11 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
     total_steps += steps;
     total_wall += r.wall_s;
     not_reached += run.reached() ? 0 : 1;
-    table.add({short_name(run.role()), std::to_string(run.run_id()),
+    table.add({short_name(run.role()), std::to_string(run.run_id()), outcome_text(run),
                std::to_string(run.env_steps()),
                run.reached() ? std::to_string(run.steps_to_target()) : "not reached",
-               fixed(run.last_success(), 2), fixed(r.wall_s, 1) + " s",
-               std::to_string(run.latest_checkpoint_id())});
+               score_text(run), fixed(run.target_success(), 2), fixed(run.last_success(), 2),
+               fixed(r.wall_s, 1) + " s", std::to_string(run.latest_checkpoint_id())});
     json_roles.push_back({{"role", short_name(run.role())},
                           {"run_id", run.run_id()},
                           {"env_steps", run.env_steps()},
@@ -143,14 +145,17 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
                           {"steps_to_target", run.reached() ? nlohmann::json(run.steps_to_target())
                                                             : nlohmann::json(nullptr)},
                           {"final_success", run.last_success()},
+                          {"final_score", run.has_last_score() ? nlohmann::json(run.last_score())
+                                                               : nlohmann::json(nullptr)},
+                          {"target_success", run.target_success()},
                           {"wall_s", r.wall_s},
                           {"checkpoint_id", run.latest_checkpoint_id()}});
   }
   // A part that did not reach its target adds all the steps it spent: the total says so.
-  table.add({"total", "", "",
+  table.add({"total", "", "", "",
              std::to_string(total_steps) +
                  (not_reached ? " (" + std::to_string(not_reached) + " not reached)" : ""),
-             "", fixed(total_wall, 1) + " s", ""});
+             "", "", "", fixed(total_wall, 1) + " s", ""});
   std::printf("\n");
   table.print(stdout);
   std::printf("\nheld-out through the services: success %.3f over %d episodes (seed %llu)",

@@ -18,8 +18,4 @@ struct WatchOptions {
 train::v1::TrainingRun watch_run(const std::string& address, std::int64_t run_id,
                                  const WatchOptions& options);
 
-// "approach  run 3  [#######-------]  12.0k/60.0k steps  success 0.84  eta 0m41s"
-std::string progress_line(const train::v1::TrainingRun& run, const train::v1::MetricPoint* metric,
-                          int width);
-
 }  // namespace pnp::pnpctl

@@ -9,7 +9,9 @@
 
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/rpc.h"
+#include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/run_watch.h"
+#include "clients/pnpctl/table.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 
 namespace pnp::pnpctl {
@@ -105,14 +107,14 @@ int train_command(const Endpoints& endpoints, const TrainArgs& args) {
   if (args.detach) return 0;
   explain_interrupt(created.run().run_id());
   const auto run = watch_run(address, created.run().run_id(), {args.quiet, stderr});
-  std::printf(
-      "run %lld %s: %lld steps, success %.2f, %s, latest checkpoint %lld\n",
-      static_cast<long long>(run.run_id()), short_name(run.state()).c_str(),
-      static_cast<long long>(run.env_steps()), run.last_success(),
-      run.reached()
-          ? ("target reached at " + std::to_string(run.steps_to_target()) + " steps").c_str()
-          : "target not reached",
-      static_cast<long long>(run.latest_checkpoint_id()));
+  const std::string target = run.reached()
+                                 ? "target " + fixed(run.target_success(), 2) + " reached at " +
+                                       std::to_string(run.steps_to_target()) + " steps"
+                                 : "target " + fixed(run.target_success(), 2) + " not reached";
+  std::printf("run %lld %s: %lld steps, score %s, success %.2f, %s, latest checkpoint %lld\n",
+              static_cast<long long>(run.run_id()), outcome_text(run).c_str(),
+              static_cast<long long>(run.env_steps()), score_text(run).c_str(), run.last_success(),
+              target.c_str(), static_cast<long long>(run.latest_checkpoint_id()));
   if (run.state() == train::v1::RUN_STATE_FAILED)
     std::fprintf(stderr, "pnpctl: run %lld failed: %s\n", static_cast<long long>(run.run_id()),
                  run.error().c_str());

@@ -34,8 +34,10 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1000;
   bool dry_run = false, json = false, quiet = false;
   app.add_option("--controller", controller_address, "robot controller host:port")
+      ->envname("PNP_ROBOT_CONTROLLER_ADDRESS")
       ->capture_default_str();
   app.add_option("--inference", inference_address, "inference service host:port")
+      ->envname("PNP_INFERENCE_ADDRESS")
       ->capture_default_str();
   app.add_option("--config", config_path, "gateway config (frames, limits, timing)")
       ->capture_default_str();

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <set>
 
 namespace pnp::plot {
@@ -41,12 +42,34 @@ std::string palette_colour(std::size_t i) {
   return kColours[i % kColours.size()];
 }
 
+std::vector<double> axis_ticks(double max, int max_ticks) {
+  if (!(max > 0) || !std::isfinite(max)) max = 1;
+  max_ticks = std::max(max_ticks, 1);
+  const double magnitude = std::pow(10.0, std::floor(std::log10(max / max_ticks)));
+  double step = magnitude;
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    step = m * magnitude;
+    if (max / step <= max_ticks) break;
+  }
+  const int intervals = static_cast<int>(std::ceil(max / step - 1e-9));
+  std::vector<double> ticks;
+  for (int k = 0; k <= intervals; ++k) ticks.push_back(step * k);
+  return ticks;
+}
+
+std::string tick_label(double value, bool in_thousands) {
+  if (!in_thousands || std::abs(value) < 1000) return fmt::format("{:g}", value);
+  return fmt::format("{:g}k", value / 1000);
+}
+
 std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& series) {
   constexpr double W = 900, H = 420, L = 70, R = 20, B = 50;
   const double T = spec.title.empty() ? 30 : 45;
-  double x_max = 1;
+  double data_max = 0;
   for (const auto& s : series)
-    for (const auto& [x, y] : s.points) x_max = std::max(x_max, x);
+    for (const auto& [x, y] : s.points) data_max = std::max(data_max, x);
+  const std::vector<double> x_ticks = axis_ticks(data_max);
+  const double x_max = x_ticks.back();
   const double y_span = spec.y_max > spec.y_min ? spec.y_max - spec.y_min : 1;
   auto px = [&](double x) { return L + (W - L - R) * x / x_max; };
   auto py = [&](double y) {
@@ -71,27 +94,39 @@ std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& ser
         "text-anchor='end'>{}</text>\n",
         L, py(g), W - R, py(g), L - 5, py(g) + 4, g);
   }
-  for (int k = 0; k <= 4; ++k) {
-    const double x = x_max * k / 4;
-    const std::string label =
-        spec.x_in_thousands ? fmt::format("{:.0f}k", x / 1000) : fmt::format("{:.0f}", x);
-    svg += fmt::format("<text x='{:.1f}' y='{}' text-anchor='middle'>{}</text>\n", px(x),
-                       H - B + 16, label);
+  for (double x : x_ticks) {
+    svg += fmt::format(
+        "<line x1='{0:.1f}' y1='{1}' x2='{0:.1f}' y2='{2}' stroke='black'/>"
+        "<text x='{0:.1f}' y='{3}' text-anchor='middle'>{4}</text>\n",
+        px(x), H - B, H - B + 4, H - B + 16, tick_label(x, spec.x_in_thousands));
   }
   for (const auto& s : series) {
     std::string points;
     for (const auto& [x, y] : s.points) points += fmt::format("{:.1f},{:.1f} ", px(x), py(y));
     svg += fmt::format("<polyline fill='none' stroke='{}' stroke-opacity='0.8' points='{}'/>\n",
                        s.colour, points);
+    if (!spec.markers) continue;
+    for (const auto& [x, y] : s.points)
+      svg += fmt::format("<circle cx='{:.1f}' cy='{:.1f}' r='2.5' fill='{}'/>\n", px(x), py(y),
+                         s.colour);
   }
-  double ly = T + 10;
+  // The legend, on a translucent box so curves under it stay visible.
+  std::vector<const Series*> entries;
   std::set<std::string> listed;
-  for (const auto& s : series) {
-    if (!listed.insert(s.label).second) continue;
+  for (const auto& s : series)
+    if (listed.insert(s.label).second) entries.push_back(&s);
+  if (!entries.empty()) {
+    svg += fmt::format(
+        "<rect x='{}' y='{}' width='{}' height='{}' fill='white' fill-opacity='0.8' "
+        "stroke='#ccc'/>\n",
+        W - 268, T, 262, 18 * entries.size() + 6);
+  }
+  double ly = T + 12;
+  for (const Series* s : entries) {
     svg += fmt::format(
         "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/><text x='{}' "
         "y='{}'>{}</text>\n",
-        W - 260, ly, W - 235, ly, s.colour, W - 228, ly + 4, escape(s.label));
+        W - 260, ly, W - 235, ly, s->colour, W - 228, ly + 4, escape(s->label));
     ly += 18;
   }
   return svg + "</svg>\n";

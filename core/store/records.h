@@ -43,6 +43,7 @@ struct RunRecord {
   std::string error;  // why it failed, empty otherwise
   long long env_steps = 0;
   double last_success = 0;
+  std::optional<double> last_score;  // the stop rule's score at the last evaluation
   bool reached = false;
   std::optional<long long> steps_to_target;
 };
@@ -57,6 +58,10 @@ struct MetricPoint {
   double critic_loss = 0;
   double actor_loss = 0;
   long long updates = 0;
+  // What the run's stop rule compared with its target (experts: the lower of task and
+  // subtask success; the choreographer: task success). Empty for evaluations stored
+  // before the store kept it.
+  std::optional<double> stop_score{};
 };
 
 struct CheckpointInfo {

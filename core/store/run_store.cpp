@@ -12,7 +12,7 @@ namespace {
 constexpr const char* kRunColumns =
     "id, role, algorithm, robot, object, seed, config_json, code_commit, parent_checkpoint_id, "
     "state, error, env_steps, last_success, reached, steps_to_target, created_ms, updated_ms, "
-    "finished_ms, gemm_path";
+    "finished_ms, gemm_path, last_score";
 
 RunRecord read_run(const Statement& st) {
   RunRecord r;
@@ -35,6 +35,7 @@ RunRecord read_run(const Statement& st) {
   r.updated_ms = st.column_int(16);
   if (!st.is_null(17)) r.finished_ms = st.column_int(17);
   r.spec.gemm_path = st.column_text(18);
+  if (!st.is_null(19)) r.last_score = st.column_double(19);
   return r;
 }
 
@@ -180,8 +181,8 @@ void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool rea
   }
   auto insert = db_.prepare(
       "INSERT OR REPLACE INTO metrics (run_id, env_steps, episodes, wall_s, task_success, "
-      "subtask_success, sampled_success, critic_loss, actor_loss, updates) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      "subtask_success, sampled_success, critic_loss, actor_loss, updates, stop_score) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   insert.bind(1, run_id)
       .bind(2, static_cast<std::int64_t>(p.env_steps))
       .bind(3, static_cast<std::int64_t>(p.episodes))
@@ -191,18 +192,20 @@ void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool rea
       .bind(7, p.sampled_success)
       .bind(8, p.critic_loss)
       .bind(9, p.actor_loss)
-      .bind(10, static_cast<std::int64_t>(p.updates));
+      .bind(10, static_cast<std::int64_t>(p.updates))
+      .bind_optional(11, p.stop_score);
   insert.run();
   auto update = db_.prepare(
       "UPDATE runs SET env_steps = ?, last_success = ?, reached = ?, steps_to_target = ?, "
-      "updated_ms = ? WHERE id = ?");
+      "updated_ms = ?, last_score = ? WHERE id = ?");
   update.bind(1, static_cast<std::int64_t>(p.env_steps))
       .bind(2, p.task_success)
       .bind(3, static_cast<std::int64_t>(reached))
       .bind_optional(4,
                      steps_to_target ? std::optional<std::int64_t>(*steps_to_target) : std::nullopt)
       .bind(5, now_ms())
-      .bind(6, run_id);
+      .bind_optional(6, p.stop_score)
+      .bind(7, run_id);
   update.run();
 }
 
@@ -210,13 +213,16 @@ std::vector<MetricPoint> RunStore::metrics(std::int64_t run_id) {
   get_run(run_id);  // NOT_FOUND for an unknown run, rather than an empty curve
   auto st = db_.prepare(
       "SELECT env_steps, episodes, wall_s, task_success, subtask_success, sampled_success, "
-      "critic_loss, actor_loss, updates FROM metrics WHERE run_id = ? ORDER BY env_steps");
+      "critic_loss, actor_loss, updates, stop_score FROM metrics WHERE run_id = ? ORDER BY "
+      "env_steps");
   st.bind(1, run_id);
   std::vector<MetricPoint> out;
   while (st.step()) {
-    out.push_back({st.column_int(0), st.column_int(1), st.column_double(2), st.column_double(3),
-                   st.column_double(4), st.column_double(5), st.column_double(6),
-                   st.column_double(7), st.column_int(8)});
+    MetricPoint& p =
+        out.emplace_back(MetricPoint{st.column_int(0), st.column_int(1), st.column_double(2),
+                                     st.column_double(3), st.column_double(4), st.column_double(5),
+                                     st.column_double(6), st.column_double(7), st.column_int(8)});
+    if (!st.is_null(9)) p.stop_score = st.column_double(9);
   }
   return out;
 }

@@ -10,7 +10,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 2> kMigrations{
+constexpr std::array<std::string_view, 3> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -71,6 +71,12 @@ CREATE TABLE promotions (
     // 2: the GEMM path a run was trained on.
     R"sql(
 ALTER TABLE runs ADD COLUMN gemm_path TEXT NOT NULL DEFAULT '';
+)sql",
+    // 3: the score the run's stop rule compares with its target (experts: the lower of task
+    // and subtask success), beside task success. NULL for evaluations from before it was kept.
+    R"sql(
+ALTER TABLE metrics ADD COLUMN stop_score REAL;
+ALTER TABLE runs ADD COLUMN last_score REAL;
 )sql",
 };
 

@@ -18,7 +18,7 @@ using Clock = std::chrono::steady_clock;
 
 store::MetricPoint to_metric(const rl::CurvePoint& p) {
   return {p.env_steps,       p.episodes,    p.wall_s,     p.task_success, p.subtask_success,
-          p.sampled_success, p.critic_loss, p.actor_loss, p.updates};
+          p.sampled_success, p.critic_loss, p.actor_loss, p.updates,      p.stop_score};
 }
 
 rl::CurvePoint to_curve_point(const store::MetricPoint& m) {
@@ -32,6 +32,7 @@ rl::CurvePoint to_curve_point(const store::MetricPoint& m) {
   p.critic_loss = m.critic_loss;
   p.actor_loss = m.actor_loss;
   p.updates = m.updates;
+  p.stop_score = m.stop_score.value_or(0);  // the trainer recomputes it when it resumes
   return p;
 }
 

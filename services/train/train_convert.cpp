@@ -152,6 +152,7 @@ void to_proto(const store::MetricPoint& p, train::v1::MetricPoint& out) {
   out.set_critic_loss(p.critic_loss);
   out.set_actor_loss(p.actor_loss);
   out.set_updates(p.updates);
+  if (p.stop_score) out.set_stop_score(*p.stop_score);
 }
 
 void set_millis(store::Millis ms, google::protobuf::Timestamp& out) {

@@ -161,6 +161,27 @@ TEST_F(StoreTest, MetricsAreTheLearningCurveAndUpdateTheRunSummary) {
   EXPECT_EQ(store.metrics(run.id).size(), 2u);
 }
 
+TEST_F(StoreTest, TheStopScoreIsKeptBesideTaskSuccessAndMayBeUnknown) {
+  RunStore store(path_);
+  const auto run = store.create_run(spec());
+  store.set_state(run.id, RunState::kRunning);
+  MetricPoint unknown{1000, 50, 2.5, 1.0, 0.7, 0, 0.01, -1.0, 400};  // as before it was kept
+  store.record_metric(run.id, unknown, false, std::nullopt);
+  EXPECT_FALSE(store.get_run(run.id).last_score);
+  MetricPoint scored = unknown;
+  scored.env_steps = 2000;
+  scored.stop_score = 0.7;  // the lower of task and subtask success: not task success
+  store.record_metric(run.id, scored, false, std::nullopt);
+  const auto curve = store.metrics(run.id);
+  ASSERT_EQ(curve.size(), 2u);
+  EXPECT_FALSE(curve[0].stop_score);
+  ASSERT_TRUE(curve[1].stop_score);
+  EXPECT_DOUBLE_EQ(*curve[1].stop_score, 0.7);
+  EXPECT_DOUBLE_EQ(curve[1].task_success, 1.0);
+  ASSERT_TRUE(store.get_run(run.id).last_score);
+  EXPECT_DOUBLE_EQ(*store.get_run(run.id).last_score, 0.7);
+}
+
 TEST_F(StoreTest, CheckpointsRoundTripAndACorruptedBlobIsNeverServed) {
   RunStore store(path_);
   const auto run = store.create_run(spec("retract"));

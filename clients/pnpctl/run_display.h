@@ -1,0 +1,28 @@
+#pragma once
+// How pnpctl shows a training run: its outcome, the stop rule's score beside task success,
+// its progress line and its name in a plot's legend. Pure formatting, no calls.
+
+#include <string>
+
+#include "pnp/train/v1/train_service.pb.h"
+
+namespace pnp::pnpctl {
+
+// The run's state, with a finished run's outcome: "reached" (its target, twice in a row)
+// or "not-reached" (it stopped at its step cap) instead of "succeeded"; otherwise the
+// state ("running", "failed", ...).
+std::string outcome_text(const train::v1::TrainingRun& run);
+
+// The stop rule's score at the last evaluation, "0.70"; "-" for a run stored before the
+// score was kept.
+std::string score_text(const train::v1::TrainingRun& run);
+
+// "approach  run 3  [#######-------]  12.0k/60.0k steps  score 0.70/0.97  success 0.84
+//  eta<=0m41s  running"
+std::string progress_line(const train::v1::TrainingRun& run, const train::v1::MetricPoint* metric,
+                          int width);
+
+// A learning curve's legend entry: "approach ddpg_her seed 1 (run 3)".
+std::string series_label(const train::v1::TrainingRun& run);
+
+}  // namespace pnp::pnpctl
