@@ -28,7 +28,8 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
     subtasks[std::string(subtask_name(s))] = {{"success_rate", r.subtask_success_rate[k]},
                                               {"mean_steps", r.subtask_mean_steps[k]}};
   }
-  return {{"robot", robot_name(r.robot)},
+  return {{"world", world_profile_name(r.world)},
+          {"robot", robot_name(r.robot)},
           {"object", object_name(r.object)},
           {"seed", r.seed},
           {"episodes", r.episodes},
@@ -46,7 +47,8 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
 }
 
 void print_cell(const pnp::sim::ScriptedEvalReport& r) {
-  std::printf("robot %s, object %s, seed %llu, %d episodes\n",
+  std::printf("world %s, robot %s, object %s, seed %llu, %d episodes\n",
+              std::string(pnp::sim::world_profile_name(r.world)).c_str(),
               std::string(pnp::sim::robot_name(r.robot)).c_str(),
               std::string(pnp::sim::object_name(r.object)).c_str(),
               static_cast<unsigned long long>(r.seed), r.episodes);
@@ -66,10 +68,11 @@ void print_cell(const pnp::sim::ScriptedEvalReport& r) {
 }
 
 void print_summary_table(const std::vector<pnp::sim::ScriptedEvalReport>& reports) {
-  std::printf("%-7s %-12s %9s %9s %15s %13s %7s\n", "robot", "object", "episodes", "success",
-              "95% CI", "active steps", "faults");
+  std::printf("%-6s %-7s %-12s %9s %9s %15s %13s %7s\n", "world", "robot", "object", "episodes",
+              "success", "95% CI", "active steps", "faults");
   for (const auto& r : reports) {
-    std::printf("%-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
+    std::printf("%-6s %-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
+                std::string(pnp::sim::world_profile_name(r.world)).c_str(),
                 std::string(pnp::sim::robot_name(r.robot)).c_str(),
                 std::string(pnp::sim::object_name(r.object)).c_str(), r.episodes, r.success_rate,
                 r.success_ci95_low, r.success_ci95_high, r.mean_steps, r.std_steps,
@@ -108,23 +111,25 @@ std::vector<std::unique_ptr<pnp::sim::SubtaskPolicy>> load_experts(const std::st
   return out;
 }
 
-pnp::sim::ScriptedEvalReport evaluate_experts(pnp::sim::Robot robot, pnp::sim::ObjectShape object,
-                                              const std::string& list, long long episodes,
-                                              std::uint64_t seed, std::size_t threads) {
+pnp::sim::ScriptedEvalReport evaluate_experts(pnp::sim::WorldProfile world, pnp::sim::Robot robot,
+                                              pnp::sim::ObjectShape object, const std::string& list,
+                                              long long episodes, std::uint64_t seed,
+                                              std::size_t threads) {
   using namespace pnp;
   const auto experts = load_experts(list);
-  const sim::LocalEnvFactory envs(sim::WorldModel::load(robot, object));
+  const sim::LocalEnvFactory envs(sim::WorldModel::load(robot, object, world));
   ThreadPool pool(threads);
   return sim::evaluate_pipeline(envs, {experts[0].get(), experts[1].get(), experts[2].get()},
                                 episodes, seed, pool);
 }
 
 // Replays episode `index` of the evaluation (same seed derivation) and prints every step.
-void trace_episode(pnp::sim::Robot robot, pnp::sim::ObjectShape object, const std::string& list,
-                   std::uint64_t seed, long long index) {
+void trace_episode(pnp::sim::WorldProfile world, pnp::sim::Robot robot,
+                   pnp::sim::ObjectShape object, const std::string& list, std::uint64_t seed,
+                   long long index) {
   using namespace pnp;
   const auto experts = load_experts(list.empty() ? "scripted,scripted,scripted" : list);
-  const auto env = sim::LocalEnvFactory(sim::WorldModel::load(robot, object)).make();
+  const auto env = sim::LocalEnvFactory(sim::WorldModel::load(robot, object, world)).make();
   const std::uint64_t episode_seed = derive_seed(seed, static_cast<std::uint64_t>(index));
   std::printf(
       "episode %lld (seed %llu): step subtask | action xyz grip | gripper | object | "
@@ -141,8 +146,9 @@ void trace_episode(pnp::sim::Robot robot, pnp::sim::ObjectShape object, const st
             a[2], a[3], s.gripper.x(), s.gripper.y(), s.gripper.z(), s.object.x(), s.object.y(),
             s.object.z(), s.finger_gap_m, (s.object - s.episode_goal).norm());
       });
-  std::printf("success %d, physics fault %d, final distance %.3f m\n", outcome.success ? 1 : 0,
-              outcome.physics_fault ? 1 : 0, outcome.final_distance_m);
+  std::printf("success %d, physics fault %s, final distance %.3f m\n", outcome.success ? 1 : 0,
+              std::string(sim::physics_fault_name(outcome.fault)).c_str(),
+              outcome.final_distance_m);
 }
 
 }  // namespace
@@ -150,6 +156,7 @@ void trace_episode(pnp::sim::Robot robot, pnp::sim::ObjectShape object, const st
 int main(int argc, char** argv) {
   CLI::App app{"Evaluate the scripted approach -> manipulate -> retract pipeline",
                "pnp-scripted-eval"};
+  std::string world = "paper";
   std::string robot = "fetch";
   std::string object = "block";
   long long episodes = 100;
@@ -162,6 +169,8 @@ int main(int argc, char** argv) {
   app.add_option("--experts", experts,
                  "approach,manipulate,retract: checkpoint paths or \"scripted\" (default: all "
                  "scripted)");
+  app.add_option("--world", world, "world profile: paper, gym or all (docs/SIMULATION.md)")
+      ->capture_default_str();
   app.add_option("--robot", robot, "fetch, panda or all")->capture_default_str();
   app.add_option("--object", object, "block, small_block, cylinder or all")->capture_default_str();
   app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")
@@ -173,21 +182,26 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "print one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
     pnp::require_positive(episodes, "--episodes");
+    const auto worlds =
+        select(world, pnp::sim::kAllWorldProfiles, &pnp::sim::parse_world_profile, "--world");
     const auto robots = select(robot, pnp::sim::kAllRobots, &pnp::sim::parse_robot, "--robot");
     const auto objects =
         select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
     if (trace >= 0) {
-      if (robots.size() != 1 || objects.size() != 1)
-        pnp::throw_invalid_argument("--trace", "one --robot and one --object", "\"all\"");
-      trace_episode(robots.front(), objects.front(), experts, seed, trace);
+      if (worlds.size() != 1 || robots.size() != 1 || objects.size() != 1)
+        pnp::throw_invalid_argument("--trace", "one --world, one --robot and one --object",
+                                    "\"all\"");
+      trace_episode(worlds.front(), robots.front(), objects.front(), experts, seed, trace);
       return;
     }
     std::vector<pnp::sim::ScriptedEvalReport> reports;
-    for (auto r : robots) {
-      for (auto o : objects) {
-        reports.push_back(experts.empty()
-                              ? pnp::sim::evaluate_scripted(r, o, episodes, seed, threads)
-                              : evaluate_experts(r, o, experts, episodes, seed, threads));
+    for (auto w : worlds) {
+      for (auto r : robots) {
+        for (auto o : objects) {
+          reports.push_back(experts.empty()
+                                ? pnp::sim::evaluate_scripted(r, o, episodes, seed, threads, w)
+                                : evaluate_experts(w, r, o, experts, episodes, seed, threads));
+        }
       }
     }
     if (reports.size() == 1) {

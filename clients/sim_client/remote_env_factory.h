@@ -25,6 +25,9 @@ class RemoteEnvFactory final : public sim::EnvFactory {
   std::unique_ptr<sim::Environment> make() const override;
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
+  // The simulation service's CreateEnv does not take a profile yet: it serves the paper
+  // world.
+  sim::WorldProfile profile() const override { return sim::WorldProfile::kPaper; }
 
  private:
   struct Service {

@@ -166,7 +166,7 @@ Episode SimulatedArm::reset(std::uint64_t seed) {
   std::copy(world_->home_qvel().begin(), world_->home_qvel().end(), d->qvel);
   Rng rng(seed);
   const sim::EpisodeLayout layout =
-      sim::sample_episode_layout(rng, world_->object_spec().half_height_m);
+      sim::sample_episode_layout(rng, world_->object_spec().half_height_m, world_->parameters());
   mjtNum* object_qpos = d->qpos + ids.object_qpos;
   for (int k = 0; k < 3; ++k) object_qpos[k] = layout.object(k);
   object_qpos[3] = 1;

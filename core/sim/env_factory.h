@@ -18,6 +18,7 @@ class EnvFactory {
   virtual std::unique_ptr<Environment> make() const = 0;
   virtual Robot robot() const = 0;
   virtual ObjectShape object() const = 0;
+  virtual WorldProfile profile() const = 0;
   // The extent the fingers close on, metres (what task states carry).
   double object_width_m() const { return 2 * object_spec(object()).half_width_m; }
 
@@ -34,6 +35,7 @@ class LocalEnvFactory final : public EnvFactory {
   std::unique_ptr<Environment> make() const override;
   Robot robot() const override { return world_->robot(); }
   ObjectShape object() const override { return world_->object(); }
+  WorldProfile profile() const override { return world_->profile(); }
   const std::shared_ptr<const WorldModel>& world() const { return world_; }
 
  private:

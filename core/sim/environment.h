@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string_view>
 
 #include "sim/observation.h"
 #include "sim/subtask.h"
@@ -20,6 +21,22 @@ enum class PhysicsFault {
   kEjected,    // the object moves impossibly fast or leaves the scene: a contact blew up
 };
 
+constexpr std::string_view physics_fault_name(PhysicsFault fault) {
+  switch (fault) {
+    case PhysicsFault::kNone:
+      return "none";
+    case PhysicsFault::kUnstable:
+      return "unstable";
+    case PhysicsFault::kNonFinite:
+      return "non-finite";
+    case PhysicsFault::kCapacity:
+      return "capacity";
+    case PhysicsFault::kEjected:
+      return "ejected";
+  }
+  return "unknown";
+}
+
 struct StepResult {
   Observation observation;        // after the step (a fresh episode's after a fault)
   Eigen::Vector3d achieved_goal;  // for the objective the step was scored on
@@ -29,8 +46,8 @@ struct StepResult {
   // the goal passed to step() (the goal acted on), as the replay judges a stored
   // transition: one rule, so a stored done equals the environment's.
   bool objective_done = false;
-  bool episode_over = false;      // the 50th step was taken (reset() before stepping again),
-                                  // or a fault ended it (a fresh episode has already begun)
+  bool episode_over = false;  // the 50th step was taken (reset() before stepping again),
+                              // or a fault ended it (a fresh episode has already begun)
   PhysicsFault fault = PhysicsFault::kNone;
 };
 

@@ -47,7 +47,9 @@ void PickPlaceEnv::start_episode() {
   std::copy(world_->home_qpos().begin(), world_->home_qpos().end(), d->qpos);
   std::copy(world_->home_qvel().begin(), world_->home_qvel().end(), d->qvel);
 
-  const EpisodeLayout episode = sample_episode_layout(rng_, world_->object_spec().half_height_m);
+  const WorldParameters& world = world_->parameters();
+  const EpisodeLayout episode =
+      sample_episode_layout(rng_, world_->object_spec().half_height_m, world);
   episode_goal_ = episode.goal;
   mjtNum* object_qpos = d->qpos + ids.object_qpos;
   for (int k = 0; k < 3; ++k) object_qpos[k] = episode.object(k);
@@ -55,13 +57,15 @@ void PickPlaceEnv::start_episode() {
   object_qpos[4] = object_qpos[5] = object_qpos[6] = 0;
   mju_zero(d->qvel + ids.object_dof, 6);
 
+  const Eigen::Vector3d start = world.gripper_start();
   for (int k = 0; k < 3; ++k) {
-    d->mocap_pos[3 * ids.gripper_mocap + k] = layout::kGripperStart(k);
+    d->mocap_pos[3 * ids.gripper_mocap + k] = start(k);
     d->mocap_pos[3 * ids.target_mocap + k] = episode.goal(k);
   }
   for (int k = 0; k < 4; ++k)
     d->mocap_quat[4 * ids.gripper_mocap + k] = world_->gripper_down_quat()(k);
-  for (int actuator : ids.finger_actuator) d->ctrl[actuator] = world_->finger_range_m();
+  const double fingers = world.fingers_open_at_reset ? world_->finger_range_m() : 0.0;
+  for (int actuator : ids.finger_actuator) d->ctrl[actuator] = fingers;
 
   mj_forward(m, d);
   gravity_compensation_.apply(m, d);
@@ -73,15 +77,26 @@ void PickPlaceEnv::start_episode() {
 void PickPlaceEnv::apply_action(const Action& action) {
   mjData* d = data_.get();
   const WorldIds& ids = world_->ids();
+  const WorldParameters& world = world_->parameters();
   mjtNum* target = d->mocap_pos + 3 * ids.gripper_mocap;
   for (int k = 0; k < 3; ++k) {
-    target[k] = std::clamp(target[k] + action(k) * layout::kActionPositionScale,
-                           layout::kWorkspaceMin(k), layout::kWorkspaceMax(k));
+    const double delta = action(k) * layout::kActionPositionScale;
+    switch (world.mocap) {
+      case MocapControl::kAccumulateClamped:
+        target[k] =
+            std::clamp(target[k] + delta, layout::kWorkspaceMin(k), layout::kWorkspaceMax(k));
+        break;
+      case MocapControl::kFromGripper:  // the target starts where the gripper is (the weld's
+                                        // lag and any contact that held it back are dropped)
+        target[k] = d->site_xpos[3 * ids.grip_site + k] + delta;
+        break;
+    }
   }
   const double range = world_->finger_range_m();
+  const double finger_scale = world.finger_action_in_metres ? 1.0 : range;
   for (std::size_t f = 0; f < 2; ++f) {
     const double q = d->qpos[ids.finger_qpos[f]];
-    d->ctrl[ids.finger_actuator[f]] = std::clamp(q + action(3) * range, 0.0, range);
+    d->ctrl[ids.finger_actuator[f]] = std::clamp(q + action(3) * finger_scale, 0.0, range);
   }
   gravity_compensation_.apply(world_->mj(), d);
 }

@@ -2,10 +2,12 @@
 // One goal-conditioned pick-and-place environment over a shared WorldModel.
 //
 // Control follows the original Fetch environment: the gripper is welded to a mocap
-// target; action xyz (clipped to [-1, 1]) times 0.05 m moves that target each step, kept
-// inside the workspace box; the gripper keeps pointing down; action[3] moves both
-// fingers' position targets by action[3] times their range (+1 opens, -1 closes). A step
-// is 20 physics substeps of 2 ms; an episode is 50 steps.
+// target; action xyz (clipped to [-1, 1]) times 0.05 m moves that target each step (in
+// the paper world from the previous target, kept inside the workspace box; in gym from
+// the gripper's current position, unclamped); the gripper keeps pointing down; action[3]
+// moves both fingers' position targets from their current positions by action[3] times
+// their range (paper) or in metres (gym); +1 opens, -1 closes. A step is 20 physics
+// substeps of 2 ms; an episode is 50 steps. world_profile.h has every difference.
 //
 // Inputs are validated before anything touches the physics: a refused call changes
 // nothing. A physics instability (a MuJoCo bad-state warning or a non-finite state) is

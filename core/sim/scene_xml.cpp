@@ -19,29 +19,37 @@ std::string_view robot_fragment(Robot robot) {
   throw_internal("robot_fragment: unknown Robot value");
 }
 
-// Options and classes. Arm links are visual only; the palm, the finger pads, the object,
-// the table and the floor collide. Finger pads use torsional friction (condim 4) so a
-// thin cylinder does not spin out of the grasp.
-std::string head(Robot robot, ObjectShape object) {
-  return fmt::format(R"(<mujoco model="pnp_{}_{}">
+// Options and classes. Collision bits: the floor, the table and the object (contype 1,
+// conaffinity 3) touch everything; the palm and the pads (1, 1) touch them; arm links
+// (class "link") are visual in the paper world and (2, 0) in gym, so they touch the
+// scenery but never each other or the gripper.
+std::string head(Robot robot, ObjectShape object, WorldProfile profile) {
+  const WorldParameters& p = world_parameters(profile);
+  return fmt::format(R"(<mujoco model="pnp_{}_{}_{}">
   <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
   <option timestep="{}" iterations="30" tolerance="1e-8" cone="pyramidal"/>
-  <size njmax="300" nconmax="60"/>
+  <size njmax="400" nconmax="80"/>
   <default>
     <geom contype="0" conaffinity="0" friction="1 0.005 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"/>
     <joint damping="0" armature="0"/>
     <default class="visual"><geom contype="0" conaffinity="0" group="1" rgba="0.7 0.7 0.75 1"/></default>
+    <default class="link"><geom contype="{}" conaffinity="0" condim="3" group="1" rgba="0.7 0.7 0.75 1"/></default>
     <default class="collide"><geom contype="1" conaffinity="1" condim="3"/></default>
-    <default class="pad"><geom type="box" contype="1" conaffinity="1" condim="4" mass="0.08"
-                               friction="1.5 0.01 0.0001" rgba="0.2 0.2 0.2 1"/></default>
+    <default class="scenery"><geom contype="1" conaffinity="3" condim="3"/></default>
+    <default class="pad"><geom type="box" contype="1" conaffinity="1" condim="{}" mass="0.08"
+                               friction="{} {} {}" rgba="0.2 0.2 0.2 1"/></default>
     <default class="arm"><joint type="hinge" axis="0 0 1" damping="4" armature="0.05"/></default>
     <default class="finger">
-      <joint type="slide" damping="20" armature="0.01"/>
-      <position kp="1000" forcerange="-40 40"/>
+      <joint type="slide" damping="{}" armature="{}"/>
+      <position kp="{}" forcerange="-{} {}"/>
     </default>
   </default>
 )",
-                     robot_name(robot), object_name(object), layout::kPhysicsTimestep_s);
+                     robot_name(robot), object_name(object), world_profile_name(profile),
+                     layout::kPhysicsTimestep_s, p.arm_links_collide ? 2 : 0, p.pad_condim,
+                     p.pad_friction[0], p.pad_friction[1], p.pad_friction[2], p.finger_damping,
+                     p.finger_armature, p.finger_kp, p.finger_force_limit_n,
+                     p.finger_force_limit_n);
 }
 
 std::string object_geom(const ObjectSpec& spec) {
@@ -51,19 +59,19 @@ std::string object_geom(const ObjectSpec& spec) {
   return fmt::format(R"(type="box" size="{0} {0} {1}")", spec.half_width_m, spec.half_height_m);
 }
 
-std::string scene_bodies(ObjectShape object) {
-  const ObjectSpec& spec = object_spec(object);
-  const auto& start = layout::kGripperStart;
+std::string scene_bodies(ObjectShape object, WorldProfile profile) {
+  const ObjectSpec spec = profiled_object_spec(object, profile);
+  const Eigen::Vector3d start = world_parameters(profile).gripper_start();
   return fmt::format(
       R"(  <worldbody>
     <light pos="1.3 0.75 2.5" dir="0 0 -1" directional="true"/>
-    <geom name="floor" class="collide" type="plane" size="3 3 0.1" rgba="0.5 0.55 0.6 1"/>
+    <geom name="floor" class="scenery" type="plane" size="3 3 0.1" rgba="0.5 0.55 0.6 1"/>
     <body name="table" pos="{} {} {}">
-      <geom name="table" class="collide" type="box" size="{} {} {}" rgba="0.6 0.45 0.3 1"/>
+      <geom name="table" class="scenery" type="box" size="{} {} {}" rgba="0.6 0.45 0.3 1"/>
     </body>
     <body name="object" pos="{} {} {}">
       <freejoint name="object"/>
-      <geom name="object" class="collide" {} mass="{}" condim="4" rgba="0.2 0.4 0.9 1"/>
+      <geom name="object" class="scenery" {} mass="{}" condim="{}" rgba="0.2 0.4 0.9 1"/>
     </body>
     <body name="target" mocap="true" pos="{} {} {}">
       <site name="target" type="sphere" size="0.02" rgba="0.9 0.1 0.1 0.4"/>
@@ -77,8 +85,9 @@ std::string scene_bodies(ObjectShape object) {
 )",
       layout::kTableCenter_x, layout::kTableCenter_y, layout::kTableTop_z / 2, layout::kTableHalfX,
       layout::kTableHalfY, layout::kTableTop_z / 2, start.x(), start.y() + 0.12,
-      layout::kTableTop_z + spec.half_height_m, object_geom(spec), spec.mass_kg, start.x(),
-      start.y(), layout::kTableTop_z + spec.half_height_m, start.x(), start.y(), start.z());
+      layout::kTableTop_z + spec.half_height_m, object_geom(spec), spec.mass_kg,
+      world_parameters(profile).object_condim, start.x(), start.y(),
+      layout::kTableTop_z + spec.half_height_m, start.x(), start.y(), start.z());
 }
 
 // The robot fragment is a complete <mujoco> document; its children are spliced in.
@@ -94,9 +103,15 @@ std::string_view fragment_body(std::string_view fragment) {
 
 }  // namespace
 
-std::string scene_xml(Robot robot, ObjectShape object) {
-  std::string xml = head(robot, object);
-  xml += scene_bodies(object);
+ObjectSpec profiled_object_spec(ObjectShape object, WorldProfile profile) {
+  ObjectSpec spec = object_spec(object);
+  spec.mass_kg *= world_parameters(profile).object_mass_scale;
+  return spec;
+}
+
+std::string scene_xml(Robot robot, ObjectShape object, WorldProfile profile) {
+  std::string xml = head(robot, object, profile);
+  xml += scene_bodies(object, profile);
   xml += fragment_body(robot_fragment(robot));
   xml += "</mujoco>\n";
   return xml;

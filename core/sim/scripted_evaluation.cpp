@@ -33,7 +33,7 @@ ScriptedEvalReport summarise(const std::vector<EpisodeOutcome>& outcomes) {
     steps_sq += static_cast<double>(o.active_steps) * o.active_steps;
     distance += o.final_distance_m;
     r.env_steps += o.env_steps;
-    r.physics_faults += o.physics_fault ? 1 : 0;
+    r.physics_faults += o.physics_fault() ? 1 : 0;
     if (!o.success) {
       r.failed_episodes.push_back(static_cast<int>(i));
       const auto first = std::find(o.subtask_done.begin(), o.subtask_done.end(), false);
@@ -86,16 +86,17 @@ ScriptedEvalReport evaluate_pipeline(const EnvFactory& envs,
   ScriptedEvalReport report = summarise(outcomes);
   report.robot = envs.robot();
   report.object = envs.object();
+  report.world = envs.profile();
   report.seed = seed;
   return report;
 }
 
 ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
-                                     std::uint64_t seed, std::size_t threads) {
+                                     std::uint64_t seed, std::size_t threads, WorldProfile world) {
   require_positive(episodes, "episodes");
   ThreadPool pool(threads);
   const ScriptedPolicy scripted;
-  return evaluate_pipeline(LocalEnvFactory(WorldModel::load(robot, object)),
+  return evaluate_pipeline(LocalEnvFactory(WorldModel::load(robot, object, world)),
                            {&scripted, &scripted, &scripted}, episodes, seed, pool);
 }
 

@@ -18,6 +18,7 @@ namespace pnp::sim {
 struct ScriptedEvalReport {
   Robot robot = Robot::kFetch;
   ObjectShape object = ObjectShape::kBlock;
+  WorldProfile world = WorldProfile::kPaper;
   std::uint64_t seed = 0;
   int episodes = 0;
   double success_rate = 0;
@@ -39,7 +40,8 @@ struct ScriptedEvalReport {
 
 // episodes and threads must be positive (threads == 0: one per hardware thread).
 ScriptedEvalReport evaluate_scripted(Robot robot, ObjectShape object, long long episodes,
-                                     std::uint64_t seed, std::size_t threads = 0);
+                                     std::uint64_t seed, std::size_t threads = 0,
+                                     WorldProfile world = WorldProfile::kPaper);
 
 // The same evaluation with any experts: each worker runs its own clone of each
 // prototype. Episode i uses derive_seed(seed, i).

@@ -27,7 +27,7 @@ EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& pol
                env.task_state());
     }
     if (last.fault != PhysicsFault::kNone) {
-      out.physics_fault = true;
+      out.fault = last.fault;
       break;
     }
     if (sequence.idle()) continue;
@@ -39,7 +39,7 @@ EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& pol
     }
   }
   if (!sequence.idle()) out.active_steps = env.elapsed_steps();
-  out.success = !out.physics_fault && last.task_success;
+  out.success = !out.physics_fault() && last.task_success;
   out.final_distance_m = (env.task_state().object - env.episode_goal()).norm();
   return out;
 }

@@ -23,7 +23,8 @@ struct EpisodeOutcome {
   std::array<int, kNumSubtasks> subtask_steps{};
   std::array<bool, kNumSubtasks> subtask_done{};  // ended by its predicate, not its cap
   double final_distance_m = 0;                    // object to goal at the end
-  bool physics_fault = false;
+  PhysicsFault fault = PhysicsFault::kNone;       // what ended the episode early, if anything
+  bool physics_fault() const { return fault != PhysicsFault::kNone; }
 };
 
 using SubtaskPolicies = std::array<SubtaskPolicy*, kNumSubtasks>;

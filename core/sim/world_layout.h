@@ -20,22 +20,20 @@ inline constexpr double kTableHalfX = 0.25;
 inline constexpr double kTableHalfY = 0.35;
 inline constexpr double kTableTop_z = 0.40;
 
-// The gripper starts 0.2 m above the table, pointing down, at the centre of the region
-// where objects and goals are sampled.
-inline const Eigen::Vector3d kGripperStart{1.34, 0.75, kTableTop_z + 0.20};
-
-// Sampling (the paper's variant of FetchPickAndPlace).
-inline constexpr double kObjectRange = 0.15;        // object xy = start xy + U(-r, r)^2
-inline constexpr double kObjectMinDistance = 0.10;  // ... at least this far from start xy
-inline constexpr double kGoalRange = 0.15;          // goal xy = start xy + U(-r, r)^2
-inline constexpr double kGoalAirProbability = 0.5;  // goal raised with this probability
-inline constexpr double kGoalMaxHeight = 0.15;      // ... by U(0, h) above resting height
+// The gripper starts pointing down over the centre of the region where objects and goals
+// are sampled; in the paper world 0.2 m above the table (kGripperStart), in others at
+// their profile's height (world_profile.h, which also holds the sampling ranges).
+inline constexpr double kGripperStart_x = 1.34;
+inline constexpr double kGripperStart_y = 0.75;
+inline constexpr double kPaperGripperStartHeight = 0.20;
+inline const Eigen::Vector3d kGripperStart{kGripperStart_x, kGripperStart_y,
+                                           kTableTop_z + kPaperGripperStartHeight};
 
 // Control: action xyz in [-1, 1] times this moves the gripper's mocap target per step.
 inline constexpr double kActionPositionScale = 0.05;
 
-// The mocap target is kept inside this box (world frame, m) so that a learner's random
-// exploration can never drag the arm out of its reachable workspace.
+// In the paper world the mocap target is kept inside this box (world frame, m) so that a
+// learner's random exploration can never drag the arm out of its reachable workspace.
 inline const Eigen::Vector3d kWorkspaceMin{1.05, 0.40, kTableTop_z + 0.005};
 inline const Eigen::Vector3d kWorkspaceMax{1.55, 1.10, kTableTop_z + 0.45};
 

@@ -9,7 +9,6 @@
 #include "sim/inverse_kinematics.h"
 #include "sim/mujoco_data.h"
 #include "sim/scene_xml.h"
-#include "sim/world_layout.h"
 
 namespace pnp::sim {
 namespace {
@@ -73,18 +72,23 @@ void weld_mocap_to_tcp(mjModel* m, int grip_site) {
 
 }  // namespace
 
-std::shared_ptr<const WorldModel> WorldModel::load(Robot robot, ObjectShape object) {
+std::shared_ptr<const WorldModel> WorldModel::load(Robot robot, ObjectShape object,
+                                                   WorldProfile profile) {
   route_mujoco_messages();
-  std::unique_ptr<mjModel, ModelDeleter> model(compile_mjcf(scene_xml(robot, object)));
-  auto world = std::make_shared<WorldModel>(Passkey{}, robot, object, std::move(model));
+  std::unique_ptr<mjModel, ModelDeleter> model(compile_mjcf(scene_xml(robot, object, profile)));
+  auto world = std::make_shared<WorldModel>(Passkey{}, robot, object, profile, std::move(model));
   world->resolve_ids();
   world->compute_home_state();
   return world;
 }
 
 WorldModel::WorldModel(Passkey /*only load() constructs*/, Robot robot, ObjectShape object,
-                       std::unique_ptr<mjModel, ModelDeleter> model)
-    : robot_(robot), object_(object), model_(std::move(model)) {}
+                       WorldProfile profile, std::unique_ptr<mjModel, ModelDeleter> model)
+    : robot_(robot),
+      object_(object),
+      profile_(profile),
+      object_spec_(profiled_object_spec(object, profile)),
+      model_(std::move(model)) {}
 
 void WorldModel::resolve_ids() {
   const mjModel* m = model_.get();
@@ -129,20 +133,22 @@ void WorldModel::compute_home_state() {
     d->qpos[m->jnt_qposadr[ids_.arm_joints[static_cast<std::size_t>(j)]]] =
         nominal[static_cast<std::size_t>(j)];
   }
+  const Eigen::Vector3d start = parameters().gripper_start();
   const IkResult ik = solve_site_ik(m, d, ids_.grip_site, ids_.arm_joints,
-                                    {layout::kGripperStart, down.toRotationMatrix()}, nominal);
+                                    {start, down.toRotationMatrix()}, nominal);
   if (!ik.converged) {
     throw_internal("home pose IK did not converge for robot " + std::string(robot_name(robot_)) +
                    ": position error " + std::to_string(ik.position_error_m) + " m");
   }
 
-  // Let the weld, gravity and the open fingers settle for 0.5 s so that episodes start
-  // from rest rather than from a state the constraints will immediately correct.
+  // Let the weld, gravity and the fingers settle for 0.5 s so that episodes start from
+  // rest rather than from a state the constraints will immediately correct.
+  const double fingers = parameters().fingers_open_at_reset ? finger_range_m_ : 0.0;
   for (int f = 0; f < 2; ++f) {
-    d->qpos[ids_.finger_qpos[static_cast<std::size_t>(f)]] = finger_range_m_;
-    d->ctrl[ids_.finger_actuator[static_cast<std::size_t>(f)]] = finger_range_m_;
+    d->qpos[ids_.finger_qpos[static_cast<std::size_t>(f)]] = fingers;
+    d->ctrl[ids_.finger_actuator[static_cast<std::size_t>(f)]] = fingers;
   }
-  for (int k = 0; k < 3; ++k) d->mocap_pos[3 * ids_.gripper_mocap + k] = layout::kGripperStart(k);
+  for (int k = 0; k < 3; ++k) d->mocap_pos[3 * ids_.gripper_mocap + k] = start(k);
   for (int k = 0; k < 4; ++k) d->mocap_quat[4 * ids_.gripper_mocap + k] = gripper_down_quat_(k);
   mju_zero(d->qvel, m->nv);
   GravityCompensation compensation(m, ids_.arm_root_body);

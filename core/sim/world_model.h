@@ -1,8 +1,8 @@
 #pragma once
 // A compiled pick-and-place world: the immutable mjModel shared by every environment
-// of the same robot and object, the ids the environment needs, and the home state (arm
-// posed with the gripper at layout::kGripperStart pointing down, fingers open) that
-// every episode starts from.
+// of the same robot, object and world profile, the ids the environment needs, and the
+// home state (arm posed with the gripper at the profile's start pointing down, fingers
+// open or closed as the profile has them) that every episode starts from.
 
 #include <mujoco/mujoco.h>
 
@@ -13,6 +13,7 @@
 
 #include "sim/object_shape.h"
 #include "sim/robot.h"
+#include "sim/world_profile.h"
 
 namespace pnp::sim {
 
@@ -35,12 +36,15 @@ struct WorldIds {
 class WorldModel {
  public:
   // Builds the MJCF, compiles it and solves the home pose. Throws pnp::Error.
-  static std::shared_ptr<const WorldModel> load(Robot robot, ObjectShape object);
+  static std::shared_ptr<const WorldModel> load(Robot robot, ObjectShape object,
+                                                WorldProfile profile = WorldProfile::kPaper);
 
   const mjModel* mj() const { return model_.get(); }
   Robot robot() const { return robot_; }
   ObjectShape object() const { return object_; }
-  const ObjectSpec& object_spec() const { return sim::object_spec(object_); }
+  WorldProfile profile() const { return profile_; }
+  const WorldParameters& parameters() const { return world_parameters(profile_); }
+  const ObjectSpec& object_spec() const { return object_spec_; }
   const WorldIds& ids() const { return ids_; }
 
   // Maximum travel of one finger (m); the opening between the pads is twice that.
@@ -59,7 +63,7 @@ class WorldModel {
   };
 
  public:
-  WorldModel(Passkey, Robot robot, ObjectShape object,
+  WorldModel(Passkey, Robot robot, ObjectShape object, WorldProfile profile,
              std::unique_ptr<mjModel, ModelDeleter> model);
 
  private:
@@ -68,6 +72,8 @@ class WorldModel {
 
   Robot robot_;
   ObjectShape object_;
+  WorldProfile profile_;
+  ObjectSpec object_spec_;
   std::unique_ptr<mjModel, ModelDeleter> model_;
   WorldIds ids_;
   double finger_range_m_ = 0;

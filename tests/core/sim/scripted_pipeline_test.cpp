@@ -11,13 +11,17 @@ namespace pnp::sim {
 namespace {
 
 // A small, fast version of the acceptance run (1000 episodes, in docs/SIMULATION.md).
-TEST(ScriptedPipeline, PicksAndPlacesTheBlockOnBothRobots) {
-  for (Robot robot : kAllRobots) {
-    const ScriptedEvalReport r = evaluate_scripted(robot, ObjectShape::kBlock, 40, 2024, 0);
-    EXPECT_GE(r.success_rate, 0.95) << robot_name(robot);
-    EXPECT_EQ(r.physics_faults, 0);
-    EXPECT_EQ(r.env_steps, 40 * 50) << "every step counts, idle ones included";
-    for (double s : r.subtask_success_rate) EXPECT_GE(s, 0.95);
+TEST(ScriptedPipeline, PicksAndPlacesTheBlockOnBothRobotsInEveryWorld) {
+  for (WorldProfile world : kAllWorldProfiles) {
+    for (Robot robot : kAllRobots) {
+      const ScriptedEvalReport r =
+          evaluate_scripted(robot, ObjectShape::kBlock, 40, 2024, 0, world);
+      EXPECT_EQ(r.world, world);
+      EXPECT_GE(r.success_rate, 0.95) << world_profile_name(world) << " " << robot_name(robot);
+      EXPECT_EQ(r.physics_faults, 0);
+      EXPECT_EQ(r.env_steps, 40 * 50) << "every step counts, idle ones included";
+      for (double s : r.subtask_success_rate) EXPECT_GE(s, 0.95) << world_profile_name(world);
+    }
   }
 }
 

@@ -1,0 +1,90 @@
+#include "sim/world_profile.h"
+
+#include "common/enum_names.h"
+#include "common/error.h"
+#include "sim/world_layout.h"
+
+namespace pnp::sim {
+namespace {
+
+// The authors' patched FetchPickAndPlace (repository lmarza/DRL-for-Pick-and-Place-Task-
+// subtasks, gymModified/): goal heights U(0, 0.15); the rest is this project's world as
+// it was before the gym profile (light block, grippy pads, visual-only arm links).
+constexpr WorldParameters kPaper{
+    .gripper_start_above_table_m = layout::kPaperGripperStartHeight,
+    .object_range_m = 0.15,
+    .object_min_distance_m = 0.10,
+    .goal_range_m = 0.15,
+    .goal_air_probability = 0.5,
+    .goal_max_height_m = 0.15,
+    .object_mass_scale = 1,
+    .object_condim = 4,
+    .pad_friction = {1.5, 0.01, 0.0001},
+    .pad_condim = 4,
+    .arm_links_collide = false,
+    .mocap = MocapControl::kAccumulateClamped,
+    .finger_action_in_metres = false,
+    .finger_kp = 1000,
+    .finger_force_limit_n = 40,
+    .finger_damping = 20,
+    .finger_armature = 0.01,
+    .fingers_open_at_reset = true,
+};
+
+// FetchPickAndPlace-v1 (openai/gym, gym/envs/robotics/): fetch_env.py (_sample_goal,
+// _reset_sim, _set_action, _env_setup), utils.py (mocap_set_action, ctrl_set_action),
+// assets/fetch/{pick_and_place,robot}.xml. The start height: gym's grip site starts
+// ~0.11 m above the resting block's centre (0.025 m half height).
+constexpr WorldParameters kGym{
+    .gripper_start_above_table_m = 0.135,
+    .object_range_m = 0.15,
+    .object_min_distance_m = 0.10,
+    .goal_range_m = 0.15,
+    .goal_air_probability = 0.5,
+    .goal_max_height_m = 0.45,
+    .object_mass_scale = 20,  // the block: 2 kg
+    .object_condim = 3,
+    .pad_friction = {1.0, 0.05, 0.01},
+    .pad_condim = 4,
+    .arm_links_collide = true,
+    .mocap = MocapControl::kFromGripper,
+    .finger_action_in_metres = true,
+    .finger_kp = 30000,
+    .finger_force_limit_n = 200,
+    .finger_damping = 1000,
+    .finger_armature = 1,
+    .fingers_open_at_reset = false,
+};
+
+}  // namespace
+
+std::string_view world_profile_name(WorldProfile profile) {
+  switch (profile) {
+    case WorldProfile::kPaper:
+      return "paper";
+    case WorldProfile::kGym:
+      return "gym";
+  }
+  throw_internal("world_profile_name: unknown WorldProfile value");
+}
+
+WorldProfile parse_world_profile(std::string_view name, std::string_view field) {
+  return parse_enum<WorldProfile>(name, kAllWorldProfiles, &world_profile_name, field);
+}
+
+Eigen::Vector3d WorldParameters::gripper_start() const {
+  return {layout::kGripperStart_x, layout::kGripperStart_y,
+          layout::kTableTop_z + gripper_start_above_table_m};
+}
+
+const WorldParameters& world_parameters(WorldProfile profile) {
+  switch (profile) {
+    case WorldProfile::kPaper:
+      return kPaper;
+    case WorldProfile::kGym:
+      return kGym;
+  }
+  throw_internal("world_parameters: unknown WorldProfile value");
+}
+
+}  // namespace pnp::sim
