@@ -80,15 +80,14 @@ void PickPlaceEnv::apply_action(const Action& action) {
   const WorldParameters& world = world_->parameters();
   mjtNum* target = d->mocap_pos + 3 * ids.gripper_mocap;
   for (int k = 0; k < 3; ++k) {
-    const double delta = action(k) * layout::kActionPositionScale;
     switch (world.mocap) {
       case MocapControl::kAccumulateClamped:
-        target[k] =
-            std::clamp(target[k] + delta, layout::kWorkspaceMin(k), layout::kWorkspaceMax(k));
+        target[k] = std::clamp(target[k] + action(k) * layout::kActionPositionScale,
+                               layout::kWorkspaceMin(k), layout::kWorkspaceMax(k));
         break;
       case MocapControl::kFromGripper:  // the target starts where the gripper is (the weld's
                                         // lag and any contact that held it back are dropped)
-        target[k] = d->site_xpos[3 * ids.grip_site + k] + delta;
+        target[k] = d->site_xpos[3 * ids.grip_site + k] + action(k) * layout::kActionPositionScale;
         break;
     }
   }
