@@ -41,7 +41,7 @@ void promote_random_hierarchy(store::RunStore& store) {
     rl::DdpgHerConfig config;  // 3 x 256
     Rng rng(1);
     rl::DdpgHerAgent agent(config, rng);
-    save(role, rl::save_expert({role, "ddpg_her", "fetch", "block", config.hidden,
+    save(role, rl::save_expert({role, "ddpg_her", "fetch", "block", "paper", config.hidden,
                                 config.hidden_activation, true, 200, 5, 0.01, 0, 0, 0, "bench"},
                                agent.actor(), nullptr, agent.observation_normalizer(),
                                agent.goal_normalizer()));
@@ -49,7 +49,8 @@ void promote_random_hierarchy(store::RunStore& store) {
   rl::ChoreographerNet net({});
   Rng rng(2);
   net.initialise(rng);
-  save("hlc", rl::save_choreographer({"fetch", "block", net.spec(), 0, 0, 0, "bench"}, net));
+  save("hlc",
+       rl::save_choreographer({"fetch", "block", "paper", net.spec(), 0, 0, 0, "bench"}, net));
 }
 
 struct Latencies {

@@ -6,9 +6,9 @@
 namespace pnp::sim_client {
 
 RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& addresses, sim::Robot robot,
-                                   sim::ObjectShape object,
+                                   sim::ObjectShape object, sim::WorldProfile world,
                                    std::chrono::milliseconds connect_timeout)
-    : robot_(robot), object_(object), connect_timeout_(connect_timeout) {
+    : robot_(robot), object_(object), world_(world), connect_timeout_(connect_timeout) {
   if (addresses.empty()) {
     throw Error(ErrorCode::kInvalidArgument,
                 "sim_address: expected at least one simulation service address, got none");
@@ -26,7 +26,7 @@ RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& addresses, si
 std::unique_ptr<sim::Environment> RemoteEnvFactory::make() const {
   const Service& service = services_[next_.fetch_add(1) % services_.size()];
   return std::make_unique<RemoteEnvironment>(service.channel, service.address, robot_, object_,
-                                             connect_timeout_);
+                                             world_, connect_timeout_);
 }
 
 }  // namespace pnp::sim_client

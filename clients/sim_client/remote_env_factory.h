@@ -20,14 +20,12 @@ class RemoteEnvFactory final : public sim::EnvFactory {
  public:
   // addresses: host:port of each service (at least one; INVALID_ARGUMENT otherwise).
   RemoteEnvFactory(const std::vector<std::string>& addresses, sim::Robot robot,
-                   sim::ObjectShape object,
+                   sim::ObjectShape object, sim::WorldProfile world = sim::WorldProfile::kPaper,
                    std::chrono::milliseconds connect_timeout = std::chrono::seconds(10));
   std::unique_ptr<sim::Environment> make() const override;
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
-  // The simulation service's CreateEnv does not take a profile yet: it serves the paper
-  // world.
-  sim::WorldProfile profile() const override { return sim::WorldProfile::kPaper; }
+  sim::WorldProfile profile() const override { return world_; }
 
  private:
   struct Service {
@@ -37,6 +35,7 @@ class RemoteEnvFactory final : public sim::EnvFactory {
   std::vector<Service> services_;
   sim::Robot robot_;
   sim::ObjectShape object_;
+  sim::WorldProfile world_;
   std::chrono::milliseconds connect_timeout_;
   mutable std::atomic<std::size_t> next_{0};
 };

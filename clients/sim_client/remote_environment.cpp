@@ -13,6 +13,7 @@ namespace sv1 = pnp::sim::v1;
 
 RemoteEnvironment::RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std::string address,
                                      sim::Robot robot, sim::ObjectShape object,
+                                     sim::WorldProfile world,
                                      std::chrono::milliseconds connect_timeout)
     : stub_(sv1::SimulationService::NewStub(channel)),
       address_(std::move(address)),
@@ -23,6 +24,7 @@ RemoteEnvironment::RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std
   sv1::CreateEnvRequest create;
   create.set_robot(services::to_proto(robot));
   create.set_object(services::to_proto(object));
+  create.set_world(services::to_proto(world));
   create.set_count(1);
   // The longest idle time allowed: a trainer may pause between uses (updates, evaluations).
   create.mutable_idle_timeout()->set_seconds(3600);

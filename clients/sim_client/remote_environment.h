@@ -19,6 +19,7 @@
 #include "sim/environment.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
+#include "sim/world_profile.h"
 
 namespace pnp::sim_client {
 
@@ -26,7 +27,8 @@ class RemoteEnvironment final : public sim::Environment {
  public:
   // Creates the environment on the service; `connect_timeout` bounds that call.
   RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std::string address, sim::Robot robot,
-                    sim::ObjectShape object, std::chrono::milliseconds connect_timeout);
+                    sim::ObjectShape object, sim::WorldProfile world,
+                    std::chrono::milliseconds connect_timeout);
   ~RemoteEnvironment() override;  // ends the stream and closes the environment
   RemoteEnvironment(const RemoteEnvironment&) = delete;
   RemoteEnvironment& operator=(const RemoteEnvironment&) = delete;

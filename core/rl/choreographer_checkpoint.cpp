@@ -22,6 +22,7 @@ std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, Chor
   const nlohmann::json j = {{"kind", kKind},
                             {"robot", meta.robot},
                             {"object", meta.object},
+                            {"world", meta.world},
                             {"trunk", meta.network.trunk},
                             {"lstm", meta.network.lstm},
                             {"predicate_inputs", meta.network.predicate_inputs},
@@ -46,6 +47,7 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     ChoreographerMeta out;
     out.robot = m.at("robot");
     out.object = m.at("object");
+    out.world = m.value("world", "paper");
     out.network.trunk = m.at("trunk").get<std::vector<int>>();
     out.network.lstm = m.at("lstm");
     // Checkpoints written before these became options had both.

@@ -14,6 +14,7 @@ namespace pnp::rl {
 
 struct ChoreographerMeta {
   std::string robot, object;
+  std::string world = "paper";  // sim/world_profile.h (checkpoints before profiles: paper)
   ChoreographerSpec network;
   long long train_env_steps = 0;
   double eval_success = 0;

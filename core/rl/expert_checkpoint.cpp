@@ -24,6 +24,7 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
       {"algorithm", meta.algorithm},
       {"robot", meta.robot},
       {"object", meta.object},
+      {"world", meta.world},
       {"hidden", meta.hidden},
       {"hidden_activation", std::string(nn::activation_name(meta.hidden_activation))},
       {"learn_gripper", meta.learn_gripper},
@@ -54,6 +55,7 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.algorithm = m.at("algorithm");
     out.robot = m.at("robot");
     out.object = m.at("object");
+    out.world = m.value("world", "paper");
     out.hidden = m.at("hidden").get<std::vector<int>>();
     // Checkpoints written before the field existed are ReLU networks.
     const auto activation = m.find("hidden_activation");

@@ -19,6 +19,7 @@ struct ExpertMeta {
   std::string role;       // approach, manipulate, retract or e2e
   std::string algorithm;  // ddpg_her or bc
   std::string robot, object;
+  std::string world = "paper";  // sim/world_profile.h (checkpoints before profiles: paper)
   std::vector<int> hidden;
   nn::Activation hidden_activation = nn::Activation::kReLU;
   bool learn_gripper = true;

@@ -35,8 +35,9 @@ rl::ExpertAlgorithm expert_algorithm(const TrainingSpec& spec) {
 
 std::unique_ptr<sim::EnvFactory> environments(const TrainingSpec& spec,
                                               const TrainingHooks& hooks) {
-  if (hooks.environments) return hooks.environments(spec.robot, spec.object);
-  return std::make_unique<sim::LocalEnvFactory>(sim::WorldModel::load(spec.robot, spec.object));
+  if (hooks.environments) return hooks.environments(spec.robot, spec.object, spec.world);
+  return std::make_unique<sim::LocalEnvFactory>(
+      sim::WorldModel::load(spec.robot, spec.object, spec.world));
 }
 
 TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inputs,
@@ -72,6 +73,7 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
                           spec.algorithm,
                           std::string(sim::robot_name(spec.robot)),
                           std::string(sim::object_name(spec.object)),
+                          std::string(sim::world_profile_name(spec.world)),
                           config.ddpg.hidden,
                           config.ddpg.hidden_activation,
                           config.ddpg.learn_gripper,
@@ -117,6 +119,7 @@ TrainingOutcome train_hlc(const TrainingSpec& spec, const TrainingInputs& inputs
   auto meta_at = [&](long long steps, double success) {
     return rl::ChoreographerMeta{std::string(sim::robot_name(spec.robot)),
                                  std::string(sim::object_name(spec.object)),
+                                 std::string(sim::world_profile_name(spec.world)),
                                  spec.a3c.network,
                                  steps,
                                  success,

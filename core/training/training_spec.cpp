@@ -56,6 +56,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
           {"algorithm", s.algorithm},
           {"robot", sim::robot_name(s.robot)},
           {"object", sim::object_name(s.object)},
+          {"world", sim::world_profile_name(s.world)},
           {"seed", s.seed},
           {"preset", s.preset},
           {"stop",
@@ -129,6 +130,9 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
   read(j, "object", object, "");
   s.robot = sim::parse_robot(robot, "robot");
   s.object = sim::parse_object(object, "object");
+  std::string world(sim::world_profile_name(s.world));
+  read(j, "world", world, "");
+  s.world = sim::parse_world_profile(world, "world");
   read(j, "seed", s.seed, "");
   read(j, "preset", s.preset, "");
   read(j, "scripted_gripper", s.scripted_gripper, "");

@@ -14,6 +14,7 @@
 #include "rl/training_progress.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
+#include "sim/world_profile.h"
 
 namespace pnp::training {
 
@@ -25,6 +26,8 @@ struct TrainingSpec {
   std::string algorithm = "ddpg_her";  // ddpg_her, bc, bc_offline (experts), a3c (hlc)
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
+  // The world profile (sim/world_profile.h); runs stored before profiles existed: paper.
+  sim::WorldProfile world = sim::WorldProfile::kPaper;
   std::uint64_t seed = 0;
   // The preset the spec started from, before any single value was overridden ("": a run
   // stored before presets existed).

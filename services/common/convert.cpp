@@ -42,6 +42,23 @@ sim::ObjectShape from_proto(common::v1::ObjectShape object, std::string_view fie
   }
 }
 
+sim::WorldProfile from_proto(common::v1::World world, std::string_view field) {
+  switch (world) {
+    case common::v1::WORLD_UNSPECIFIED:
+    case common::v1::WORLD_PAPER:
+      return sim::WorldProfile::kPaper;
+    case common::v1::WORLD_GYM:
+      return sim::WorldProfile::kGym;
+    default:
+      throw_invalid_argument(field, "WORLD_PAPER or WORLD_GYM (unset: paper)",
+                             std::to_string(world));
+  }
+}
+
+common::v1::World to_proto(sim::WorldProfile world) {
+  return world == sim::WorldProfile::kGym ? common::v1::WORLD_GYM : common::v1::WORLD_PAPER;
+}
+
 common::v1::Robot to_proto(sim::Robot robot) {
   return robot == sim::Robot::kFetch ? common::v1::ROBOT_FETCH : common::v1::ROBOT_PANDA;
 }

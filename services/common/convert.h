@@ -11,12 +11,16 @@
 #include "sim/observation.h"
 #include "sim/robot.h"
 #include "sim/subtask.h"
+#include "sim/world_profile.h"
 
 namespace pnp::services {
 
 sim::Robot from_proto(common::v1::Robot robot, std::string_view field);
 sim::ObjectShape from_proto(common::v1::ObjectShape object, std::string_view field);
+// WORLD_UNSPECIFIED is the paper world; unknown values are INVALID_ARGUMENT.
+sim::WorldProfile from_proto(common::v1::World world, std::string_view field);
 common::v1::Robot to_proto(sim::Robot robot);
+common::v1::World to_proto(sim::WorldProfile world);
 common::v1::ObjectShape to_proto(sim::ObjectShape object);
 common::v1::Subtask to_proto(sim::Subtask subtask);
 

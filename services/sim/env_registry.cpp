@@ -14,8 +14,9 @@ void EnvBatch::reset(std::size_t k, std::uint64_t episode_seed) {
   ++episodes[k];
 }
 
-std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, std::uint64_t seed,
-                                int count, std::chrono::steady_clock::duration idle_timeout) {
+std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
+                                std::uint64_t seed, int count,
+                                std::chrono::steady_clock::duration idle_timeout) {
   if (count < 1 || count > kMaxBatch) {
     throw_invalid_argument("count", "1 to " + std::to_string(kMaxBatch), std::to_string(count));
   }
@@ -37,7 +38,7 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, std::
   }
   auto batch = std::make_shared<EnvBatch>();
   try {
-    batch->world = sim::WorldModel::load(robot, object);
+    batch->world = sim::WorldModel::load(robot, object, world);
     batch->seed = seed;
     for (int k = 0; k < count; ++k) batch->envs.emplace_back(batch->world);
     batch->episodes.assign(static_cast<std::size_t>(count), 0);

@@ -39,7 +39,8 @@ class EnvRegistry {
 
   // Validated: count in [1, 64], idle timeout in (0, 3600 s]; RESOURCE_EXHAUSTED past
   // 256 environments in all.
-  std::string create(sim::Robot robot, sim::ObjectShape object, std::uint64_t seed, int count,
+  std::string create(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
+                     std::uint64_t seed, int count,
                      std::chrono::steady_clock::duration idle_timeout);
   // NOT_FOUND for an unknown or expired id; marks the batch used.
   std::shared_ptr<EnvBatch> get(const std::string& id);

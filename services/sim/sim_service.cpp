@@ -131,13 +131,14 @@ grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEn
   return guarded([&] {
     const auto robot = from_proto(request->robot(), "robot");
     const auto object = from_proto(request->object(), "object");
+    const auto world = from_proto(request->world(), "world");
     std::chrono::steady_clock::duration timeout = std::chrono::seconds(300);
     if (request->has_idle_timeout()) {
       timeout = std::chrono::seconds(request->idle_timeout().seconds()) +
                 std::chrono::nanoseconds(request->idle_timeout().nanos());
     }
     response->set_env_id(
-        registry_.create(robot, object, request->seed(), request->count(), timeout));
+        registry_.create(robot, object, world, request->seed(), request->count(), timeout));
     response->set_count(request->count());
     return grpc::Status::OK;
   });
@@ -192,6 +193,7 @@ grpc::Status SimServiceImpl::GetEnvSpec(grpc::ServerContext*, const sv1::GetEnvS
   return guarded([&] {
     from_proto(request->robot(), "robot");
     from_proto(request->object(), "object");
+    from_proto(request->world(), "world");
     const double inf = std::numeric_limits<double>::infinity();
     std::vector<std::string> obs_units;
     for (int k = 0; k < sim::kObservationSize; ++k) {

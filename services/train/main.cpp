@@ -92,8 +92,10 @@ int main(int argc, char** argv) {
     MetricsRegistry metrics;
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {
-      environments = [sim_addresses](pnp::sim::Robot robot, pnp::sim::ObjectShape object) {
-        return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object);
+      environments = [sim_addresses](pnp::sim::Robot robot, pnp::sim::ObjectShape object,
+                                     pnp::sim::WorldProfile world) {
+        return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object,
+                                                                   world);
       };
     }
     pnp::training::RunManager manager(

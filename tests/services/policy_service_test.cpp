@@ -28,9 +28,21 @@ std::vector<std::uint8_t> expert_blob(const std::string& role, std::uint64_t see
   config.hidden = {16};
   Rng rng(seed);
   rl::DdpgHerAgent agent(config, rng);
-  const rl::ExpertMeta meta{
-      role, "ddpg_her", "fetch", "block", config.hidden, config.hidden_activation, true, 200, 5,
-      0.01, 0,          0,       seed,    "test"};
+  const rl::ExpertMeta meta{role,
+                            "ddpg_her",
+                            "fetch",
+                            "block",
+                            "paper",
+                            config.hidden,
+                            config.hidden_activation,
+                            true,
+                            200,
+                            5,
+                            0.01,
+                            0,
+                            0,
+                            seed,
+                            "test"};
   return rl::save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
                          agent.goal_normalizer());
 }
@@ -80,7 +92,7 @@ std::vector<std::uint8_t> choreographer_blob(std::uint64_t seed) {
   rl::ChoreographerNet net({{16}, 4});
   Rng rng(seed);
   net.initialise(rng);
-  return rl::save_choreographer({"fetch", "block", net.spec(), 0, 0, seed, "test"}, net);
+  return rl::save_choreographer({"fetch", "block", "paper", net.spec(), 0, 0, seed, "test"}, net);
 }
 
 class PolicyServiceTest : public ::testing::Test {

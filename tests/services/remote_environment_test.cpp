@@ -59,11 +59,16 @@ ErrorCode code_of(const std::function<void()>& f, std::string* message = nullptr
   return ErrorCode::kInternal;
 }
 
-TEST(RemoteEnvironment, ScriptedEpisodesMatchTheCoreBitForBit) {
+// In every world profile: the service builds the world the request names.
+class RemoteEnvironmentInWorld : public ::testing::TestWithParam<sim::WorldProfile> {};
+
+TEST_P(RemoteEnvironmentInWorld, ScriptedEpisodesMatchTheCoreBitForBit) {
   SimServer server;
-  const RemoteEnvFactory factory({server.address()}, sim::Robot::kFetch, sim::ObjectShape::kBlock);
+  const RemoteEnvFactory factory({server.address()}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
+                                 GetParam());
   const auto remote = factory.make();
-  sim::PickPlaceEnv local(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+  sim::PickPlaceEnv local(
+      sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock, GetParam()));
   for (std::uint64_t seed : {4u, 5u}) {  // two episodes on the same remote environment
     remote->reset(seed);
     local.reset(seed);
@@ -94,6 +99,12 @@ TEST(RemoteEnvironment, ScriptedEpisodesMatchTheCoreBitForBit) {
   }
 }
 
+INSTANTIATE_TEST_SUITE_P(Worlds, RemoteEnvironmentInWorld,
+                         ::testing::Values(sim::WorldProfile::kPaper, sim::WorldProfile::kGym),
+                         [](const auto& world) {
+                           return std::string(sim::world_profile_name(world.param));
+                         });
+
 TEST(RemoteEnvironment, RefusesBadInputBeforeSendingIt) {
   SimServer server;
   const RemoteEnvFactory factory({server.address()}, sim::Robot::kFetch, sim::ObjectShape::kBlock);
@@ -122,7 +133,7 @@ TEST(RemoteEnvironment, AnUnreachableServiceIsUnavailableNamingItsAddress) {
   }
   const std::string address = "127.0.0.1:" + std::to_string(port);
   const RemoteEnvFactory factory({address}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
-                                 milliseconds(300));
+                                 sim::WorldProfile::kPaper, milliseconds(300));
   std::string message;
   EXPECT_EQ(code_of([&] { factory.make(); }, &message), ErrorCode::kUnavailable);
   EXPECT_NE(message.find(address), std::string::npos) << message;
@@ -161,8 +172,8 @@ TEST(RemoteTraining, TwoServicesTrainExactlyAsInProcess) {
   };
   const auto local = run({});
   const std::vector<std::string> addresses{a.address(), b.address()};
-  const auto remote = run([&](sim::Robot robot, sim::ObjectShape object) {
-    return std::make_unique<RemoteEnvFactory>(addresses, robot, object);
+  const auto remote = run([&](sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world) {
+    return std::make_unique<RemoteEnvFactory>(addresses, robot, object, world);
   });
   ASSERT_EQ(local.result.curve.size(), remote.result.curve.size());
   ASSERT_FALSE(local.result.curve.empty());

@@ -204,6 +204,13 @@ TEST_F(SimServiceTest, CreateRefusesBadWorldsAndCountsAndCloseForgets) {
   r.set_robot(common::v1::ROBOT_PANDA);
   r.set_count(65);
   EXPECT_EQ(stub_->CreateEnv(&c2, r, &out).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  grpc::ClientContext c2w;
+  r.set_count(1);
+  r.set_world(static_cast<common::v1::World>(7));
+  status = stub_->CreateEnv(&c2w, r, &out);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("world"), std::string::npos) << status.error_message();
+  EXPECT_EQ(service_.registry().environments(), 0);
   const std::string id = create(1);
   grpc::ClientContext c3;
   sv1::CloseEnvRequest close;

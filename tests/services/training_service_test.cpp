@@ -301,8 +301,8 @@ TEST_F(TrainingServiceTest, TheChoreographerTrainsOverTheExpertsItIsGiven) {
       Rng rng(1);
       rl::DdpgHerAgent agent(config, rng);
       const auto blob = rl::save_expert(
-          {role, "ddpg_her", "fetch", "block", config.hidden, config.hidden_activation, true, 200,
-           5, 0.01, 0, 0, 1, "test"},
+          {role, "ddpg_her", "fetch", "block", "paper", config.hidden, config.hidden_activation,
+           true, 200, 5, 0.01, 0, 0, 1, "test"},
           agent.actor(), nullptr, agent.observation_normalizer(), agent.goal_normalizer());
       const auto run =
           store.create_run({role, "ddpg_her", "fetch", "block", 1, "{}", "", std::nullopt});

@@ -98,7 +98,7 @@ TEST(ChoreographerCheckpoint, KeepsThePaperChoreographersInputsAndMask) {
   nn::Matrix input;
   net.encode(env.observation(), env.episode_goal(), env.task_state(), input);
   EXPECT_EQ(input.rows(), sim::kObservationSize + sim::kGoalSize);
-  const ChoreographerMeta meta{"fetch", "block", net.spec(), 10, 0.5, 1, "test"};
+  const ChoreographerMeta meta{"fetch", "block", "paper", net.spec(), 10, 0.5, 1, "test"};
   const LoadedChoreographer loaded = load_choreographer(save_choreographer(meta, net));
   EXPECT_FALSE(loaded.meta.network.predicate_inputs);
   EXPECT_FALSE(loaded.meta.network.mask_finished);
@@ -112,12 +112,13 @@ TEST(ChoreographerCheckpoint, RoundTripGivesIdenticalDecisionsAndCorruptionIsRef
   std::vector<double> raw(sim::kObservationSize + sim::kGoalSize, 0.25);
   net.normalizer().update(raw);
   net.normalizer().refresh();
-  const ChoreographerMeta meta{"panda", "block", net.spec(), 1234, 0.97, 8, "test"};
+  const ChoreographerMeta meta{"panda", "block", "gym", net.spec(), 1234, 0.97, 8, "test"};
   const auto bytes = save_choreographer(meta, net);
   LoadedChoreographer loaded = load_choreographer(bytes);
   EXPECT_EQ(loaded.meta.robot, "panda");
   EXPECT_EQ(loaded.meta.network, net.spec());
   EXPECT_EQ(loaded.meta.train_env_steps, 1234);
+  EXPECT_EQ(loaded.meta.world, "gym");
 
   // The same two decisions (the LSTM state carries over) from both networks.
   sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock));
@@ -153,20 +154,10 @@ TEST(ChoreographerCheckpoint, AnExpertCheckpointIsRefusedByKind) {
   config.hidden = {8};
   Rng rng(1);
   DdpgHerAgent agent(config, rng);
-  const ExpertMeta meta{"approach",
-                        "ddpg_her",
-                        "fetch",
-                        "block",
-                        config.hidden,
-                        config.hidden_activation,
-                        true,
-                        200,
-                        5,
-                        0.01,
-                        10,
-                        0.5,
-                        1,
-                        "test"};
+  const ExpertMeta meta{
+      "approach", "ddpg_her", "fetch", "block", "paper", config.hidden, config.hidden_activation,
+      true,       200,        5,       0.01,    10,      0.5,           1,
+      "test"};
   const auto bytes = save_expert(meta, agent.actor(), nullptr, agent.observation_normalizer(),
                                  agent.goal_normalizer());
   try {

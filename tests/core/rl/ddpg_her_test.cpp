@@ -74,9 +74,10 @@ TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
                                     sim::Observation::Constant(-0.2)};
   std::vector<sim::Goal> goals{sim::Goal(1, 0.7, 0.5), sim::Goal(1.2, 0.8, 0.4)};
   agent.update_normalizers(obs, goals);
-  ExpertMeta meta{"retract", "ddpg_her", "fetch", "block", config.hidden, config.hidden_activation,
-                  true,      200,        5,       0.01,    1000,          0.9,
-                  5,         "test"};
+  ExpertMeta meta{
+      "retract", "ddpg_her", "fetch", "block", "paper", config.hidden, config.hidden_activation,
+      true,      200,        5,       0.01,    1000,    0.9,           5,
+      "test"};
   const auto bytes = save_expert(meta, agent.actor(), &agent.critic(),
                                  agent.observation_normalizer(), agent.goal_normalizer());
   const LoadedExpert loaded = load_expert(bytes);

@@ -42,6 +42,7 @@ TEST(TrainingSpecJson, RoundTripsEveryField) {
   TrainingSpec spec = small_spec("retract");
   spec.robot = sim::Robot::kPanda;
   spec.object = sim::ObjectShape::kCylinder;
+  spec.world = sim::WorldProfile::kGym;
   spec.scripted_gripper = true;
   spec.ddpg.polyak = 0.9;
   spec.a3c.entropy_weight = 0.02;
@@ -58,7 +59,16 @@ TEST(TrainingSpecJson, RoundTripsEveryField) {
   EXPECT_FALSE(back.a3c.network.predicate_inputs);
   EXPECT_FALSE(back.a3c.network.mask_finished);
   EXPECT_EQ(back.robot, sim::Robot::kPanda);
+  EXPECT_EQ(back.world, sim::WorldProfile::kGym);
   EXPECT_EQ(back.ddpg.hidden, (std::vector<int>{32, 32}));
+}
+
+TEST(TrainingSpecJson, AnUnknownWorldIsRefusedNamingTheField) {
+  EXPECT_TRUE(throws_code(
+      [] {
+        spec_from_json({{"world", "mujoco"}});
+      },
+      ErrorCode::kInvalidArgument, "world"));
 }
 
 TEST(TrainingSpecJson, RefusesAWrongType) {
