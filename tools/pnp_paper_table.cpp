@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
   s.ddpg = preset.ddpg;
   s.ddpg.learn_gripper = !preset.scripted_gripper;
   s.a3c = preset.a3c;
+  std::string world = "paper";
+  app.add_option("--world", world, "world profile: paper or gym (docs/SIMULATION.md)")
+      ->capture_default_str();
   app.add_option("--seeds", seeds, "seeds per method")->capture_default_str();
   app.add_option("--first-seed", first_seed)->capture_default_str();
   app.add_flag("--quick", quick,
@@ -98,6 +101,7 @@ int main(int argc, char** argv) {
       return;
     }
     require_positive(seeds, "--seeds");
+    s.world = sim::parse_world_profile(world, "--world");
     if (prefix != "chained" && prefix != "scripted")
       throw_invalid_argument("--prefix", "chained or scripted", "\"" + prefix + "\"");
     s.chained = prefix == "chained";
@@ -146,9 +150,10 @@ int main(int argc, char** argv) {
       context.held_out.clear();
       for (const auto& r : runs) {
         if (r.method == "ddpg_her" && r.held_out_success >= 0) {
-          context.held_out.emplace_back(
-              std::string(sim::robot_name(s.robot)) + " block, seed " + std::to_string(r.seed),
-              r.held_out_success);
+          context.held_out.emplace_back(std::string(sim::world_profile_name(s.world)) + " world, " +
+                                            std::string(sim::robot_name(s.robot)) +
+                                            " block, seed " + std::to_string(r.seed),
+                                        r.held_out_success);
         }
       }
       write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
@@ -182,7 +187,8 @@ int main(int argc, char** argv) {
       const auto r = tools::run_hierarchy("ddpg_her", rl::ExpertAlgorithm::kDdpgHer, first_seed,
                                           panda, progress);
       write_all();
-      context.held_out.emplace_back("panda block, seed " + std::to_string(first_seed),
+      context.held_out.emplace_back(std::string(sim::world_profile_name(s.world)) +
+                                        " world, panda block, seed " + std::to_string(first_seed),
                                     r.held_out_success);
       write_text(out / "RESULTS.md", tools::results_markdown(runs, context));
     }

@@ -19,6 +19,7 @@ struct TrainArgs {
   std::string role = "approach";
   std::string algorithm;  // empty: ddpg_her for experts and e2e, a3c for hlc
   std::string robot = "fetch", object = "block";
+  std::string world = "paper";                   // docs/SIMULATION.md, "World profiles"
   std::string preset{training::kDefaultPreset};  // training/preset.h; unset fields take its values
   std::uint64_t seed = 0;
   long long max_steps = 0;
@@ -57,18 +58,23 @@ int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);
 struct PredictArgs {
   std::vector<double> observation, goal;  // given directly, or
   std::uint64_t seed = 0;                 // the first observation of the sim's episode
-  std::string robot = "fetch", object = "block";
+  std::string robot = "fetch", object = "block", world = "paper";
 };
 int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 // Checks the named services (sim, approach, manipulate, retract, hlc, e2e, inference);
 // 0 when every one is SERVING.
 int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
                    double timeout_s);
+struct EvaluateArgs {
+  std::string robot = "fetch", object = "block", world = "paper";
+  int episodes = 100;
+  std::uint64_t seed = 424242;  // the held-out episodes' seed (no training run uses it)
+  bool json = false;
+  bool strict = false;  // refuse, rather than warn, when the served policy's world differs
+};
 // Warns (strict: refuses, FAILED_PRECONDITION) when a served role was trained on another
-// robot or object than the evaluation's.
-int evaluate_command(const Endpoints& endpoints, const std::string& robot,
-                     const std::string& object, int episodes, std::uint64_t seed, bool json,
-                     bool strict);
+// world, robot or object than the evaluation's.
+int evaluate_command(const Endpoints& endpoints, const EvaluateArgs& args);
 
 struct PipelineArgs {
   TrainArgs experts;  // role ignored; applied to approach, manipulate and retract

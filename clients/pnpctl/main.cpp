@@ -47,6 +47,8 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   cmd.add_option("--algo", a.algorithm, "ddpg_her, bc, bc_offline or a3c [by role]");
   cmd.add_option("--robot", a.robot)->capture_default_str();
   cmd.add_option("--object", a.object)->capture_default_str();
+  cmd.add_option("--world", a.world, "world profile: paper or gym (docs/SIMULATION.md)")
+      ->capture_default_str();
   cmd.add_option("--seed", a.seed)->capture_default_str();
   std::vector<std::string> presets;
   for (const auto& p : pnp::training::presets()) presets.emplace_back(p.name);
@@ -164,6 +166,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   predict_cmd->add_option("--robot", predict.robot)->capture_default_str();
   predict_cmd->add_option("--object", predict.object)->capture_default_str();
+  predict_cmd->add_option("--world", predict.world)->capture_default_str();
   predict_cmd->callback([&] { command = [&] { return predict_command(endpoints, predict); }; });
 
   std::vector<std::string> services(std::begin(kAllServices), std::end(kAllServices));
@@ -174,25 +177,20 @@ int main(int argc, char** argv) {
   health_cmd->callback(
       [&] { command = [&] { return health_command(endpoints, services, timeout_s); }; });
 
-  int episodes = 100;
-  std::uint64_t eval_seed = 424242;
-  bool json = false;
-  std::string robot = "fetch", object = "block";
+  EvaluateArgs evaluate;
   auto* evaluate_cmd = app.add_subcommand(
       "evaluate", "held-out episodes of the served hierarchy through sim and inference");
-  evaluate_cmd->add_option("--episodes", episodes)->capture_default_str();
-  evaluate_cmd->add_option("--seed", eval_seed)->capture_default_str();
-  evaluate_cmd->add_option("--robot", robot)->capture_default_str();
-  evaluate_cmd->add_option("--object", object)->capture_default_str();
-  evaluate_cmd->add_flag("--json", json);
-  bool strict = false;
-  evaluate_cmd->add_flag("--strict", strict,
-                         "refuse when the served policy was trained on another robot or object");
-  evaluate_cmd->callback([&] {
-    command = [&] {
-      return evaluate_command(endpoints, robot, object, episodes, eval_seed, json, strict);
-    };
-  });
+  evaluate_cmd->add_option("--episodes", evaluate.episodes)->capture_default_str();
+  evaluate_cmd->add_option("--seed", evaluate.seed)->capture_default_str();
+  evaluate_cmd->add_option("--robot", evaluate.robot)->capture_default_str();
+  evaluate_cmd->add_option("--object", evaluate.object)->capture_default_str();
+  evaluate_cmd->add_option("--world", evaluate.world, "world profile: paper or gym")
+      ->capture_default_str();
+  evaluate_cmd->add_flag("--json", evaluate.json);
+  evaluate_cmd->add_flag("--strict", evaluate.strict,
+                         "refuse when the served policy was trained on another world, robot or "
+                         "object");
+  evaluate_cmd->callback([&] { command = [&] { return evaluate_command(endpoints, evaluate); }; });
 
   PipelineArgs pipeline;
   auto* pipeline_cmd = app.add_subcommand(
@@ -215,6 +213,7 @@ int main(int argc, char** argv) {
     const TrainArgs& e = pipeline.experts;
     c.robot = e.robot;
     c.object = e.object;
+    c.world = e.world;
     c.seed = e.seed;
     c.preset = e.preset;
     c.target_success = e.target_success;

@@ -117,8 +117,10 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   results.push_back(train_and_promote(endpoints, hlc));
   wait_until_served(endpoints, results.back().run.latest_checkpoint_id(), args.wait_s);
   const ServiceEvaluation held_out = evaluate_through_services(
-      endpoints, parse_robot(args.experts.robot, "--robot"),
-      parse_object(args.experts.object, "--object"), args.eval_episodes, args.eval_seed);
+      endpoints,
+      {parse_robot(args.experts.robot, "--robot"), parse_object(args.experts.object, "--object"),
+       parse_world(args.experts.world, "--world")},
+      args.eval_episodes, args.eval_seed);
 
   Table table({"role", "run", "state", "steps", "to_target", "score", "target", "final_success",
                "wall", "checkpoint"});
@@ -158,15 +160,19 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
              "", "", "", fixed(total_wall, 1) + " s", ""});
   std::printf("\n");
   table.print(stdout);
-  std::printf("\nheld-out through the services: success %.3f over %d episodes (seed %llu)",
-              held_out.success_rate(), held_out.episodes,
-              static_cast<unsigned long long>(args.eval_seed));
+  std::printf(
+      "\nheld-out through the services: success %.3f over %d episodes (seed %llu, %s/%s/%s)",
+      held_out.success_rate(), held_out.episodes, static_cast<unsigned long long>(args.eval_seed),
+      args.experts.world.c_str(), args.experts.robot.c_str(), args.experts.object.c_str());
   if (!held_out.sequences.empty())
     std::printf(", choices %s x%d", held_out.sequences.front().first.c_str(),
                 held_out.sequences.front().second);
   std::printf("\n");
   if (!args.json_out.empty()) {
-    const nlohmann::json out = {{"roles", json_roles},
+    const nlohmann::json out = {{"world", args.experts.world},
+                                {"robot", args.experts.robot},
+                                {"object", args.experts.object},
+                                {"roles", json_roles},
                                 {"total_steps_to_target", total_steps},
                                 {"total_wall_s", total_wall},
                                 {"held_out",

@@ -73,6 +73,9 @@ common::v1::ObjectShape parse_object(const std::string& name, std::string_view f
   return parse_enum<common::v1::ObjectShape>(common::v1::ObjectShape_descriptor(), "OBJECT_SHAPE_",
                                              name, field);
 }
+common::v1::World parse_world(const std::string& name, std::string_view field) {
+  return parse_enum<common::v1::World>(common::v1::World_descriptor(), "WORLD_", name, field);
+}
 train::v1::RunState parse_state(const std::string& name, std::string_view field) {
   return parse_enum<train::v1::RunState>(train::v1::RunState_descriptor(), "RUN_STATE_", name,
                                          field);

@@ -28,6 +28,7 @@ common::v1::Role parse_role(const std::string& name, std::string_view field);
 train::v1::Algorithm parse_algorithm(const std::string& name, std::string_view field);
 common::v1::Robot parse_robot(const std::string& name, std::string_view field);
 common::v1::ObjectShape parse_object(const std::string& name, std::string_view field);
+common::v1::World parse_world(const std::string& name, std::string_view field);
 train::v1::RunState parse_state(const std::string& name, std::string_view field);
 
 // "approach" for ROLE_APPROACH, "running" for RUN_STATE_RUNNING...

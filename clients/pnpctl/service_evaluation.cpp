@@ -100,15 +100,15 @@ void require_evaluation_episodes(int episodes) {
     throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
 }
 
-ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, common::v1::Robot robot,
-                                            common::v1::ObjectShape object, int episodes,
-                                            std::uint64_t seed) {
+ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const ServiceWorld& world,
+                                            int episodes, std::uint64_t seed) {
   require_evaluation_episodes(episodes);
   auto sim = sim::v1::SimulationService::NewStub(channel(endpoints.sim));
   auto policy = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
   sim::v1::CreateEnvRequest create;
-  create.set_robot(robot);
-  create.set_object(object);
+  create.set_robot(world.robot);
+  create.set_object(world.object);
+  create.set_world(world.world);
   create.set_seed(seed);
   create.set_count(1);
   sim::v1::CreateEnvResponse created;

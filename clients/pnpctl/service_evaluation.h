@@ -27,8 +27,14 @@ struct ServiceEvaluation {
 // INVALID_ARGUMENT naming --episodes unless it is positive.
 void require_evaluation_episodes(int episodes);
 
-ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, common::v1::Robot robot,
-                                            common::v1::ObjectShape object, int episodes,
-                                            std::uint64_t seed);
+// Where the episodes are played.
+struct ServiceWorld {
+  common::v1::Robot robot = common::v1::ROBOT_FETCH;
+  common::v1::ObjectShape object = common::v1::OBJECT_SHAPE_BLOCK;
+  common::v1::World world = common::v1::WORLD_PAPER;
+};
+
+ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const ServiceWorld& world,
+                                            int episodes, std::uint64_t seed);
 
 }  // namespace pnp::pnpctl

@@ -38,6 +38,7 @@ void observe_from_sim(const Endpoints& endpoints, const PredictArgs& args,
   sim::v1::CreateEnvRequest create;
   create.set_robot(parse_robot(args.robot, "--robot"));
   create.set_object(parse_object(args.object, "--object"));
+  create.set_world(parse_world(args.world, "--world"));
   create.set_seed(args.seed);
   create.set_count(1);
   sim::v1::CreateEnvResponse created;
@@ -121,10 +122,9 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
 namespace {
 
 // The served roles trained on another world than the one to evaluate on, as "hlc
-// (fetch/block)"; empty if none. A mismatch can be deliberate (a retract fine-tuned for
+// (gym/fetch/block)"; empty if none. A mismatch can be deliberate (a retract fine-tuned for
 // another shape), so it is a warning unless --strict.
-std::string served_world_mismatch(const Endpoints& endpoints, const std::string& robot,
-                                  const std::string& object) {
+std::string served_world_mismatch(const Endpoints& endpoints, const EvaluateArgs& args) {
   auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
   policy::v1::GetServingStatusResponse status;
   check(stub->GetServingStatus(context_with_deadline().get(), {}, &status), "GetServingStatus",
@@ -134,32 +134,34 @@ std::string served_world_mismatch(const Endpoints& endpoints, const std::string&
     if (r.robot() == common::v1::ROBOT_UNSPECIFIED) continue;  // not recorded
     const std::string served_robot(sim::robot_name(services::from_proto(r.robot(), "robot")));
     const std::string served_object(sim::object_name(services::from_proto(r.object(), "object")));
-    if (served_robot == robot && served_object == object) continue;
-    out += (out.empty() ? "" : ", ") + short_name(r.role()) + " (" + served_robot + "/" +
-           served_object + ")";
+    const std::string served_world(
+        sim::world_profile_name(services::from_proto(r.world(), "world")));
+    if (served_robot == args.robot && served_object == args.object && served_world == args.world)
+      continue;
+    out += (out.empty() ? "" : ", ") + short_name(r.role()) + " (" + served_world + "/" +
+           served_robot + "/" + served_object + ")";
   }
   return out;
 }
 
 }  // namespace
 
-int evaluate_command(const Endpoints& endpoints, const std::string& robot,
-                     const std::string& object, int episodes, std::uint64_t seed, bool json,
-                     bool strict) {
+int evaluate_command(const Endpoints& endpoints, const EvaluateArgs& args) {
   // Bad input is refused before any service is asked.
-  parse_robot(robot, "--robot");
-  parse_object(object, "--object");
-  require_evaluation_episodes(episodes);
-  if (const std::string mismatch = served_world_mismatch(endpoints, robot, object);
-      !mismatch.empty()) {
-    const std::string message = "evaluating on " + robot + "/" + object +
-                                ", but the served policy was trained elsewhere: " + mismatch;
-    if (strict) throw Error(ErrorCode::kFailedPrecondition, message);
+  const ServiceWorld world{parse_robot(args.robot, "--robot"),
+                           parse_object(args.object, "--object"),
+                           parse_world(args.world, "--world")};
+  require_evaluation_episodes(args.episodes);
+  const std::string where = args.world + "/" + args.robot + "/" + args.object;
+  if (const std::string mismatch = served_world_mismatch(endpoints, args); !mismatch.empty()) {
+    const std::string message =
+        "evaluating on " + where + ", but the served policy was trained elsewhere: " + mismatch;
+    if (args.strict) throw Error(ErrorCode::kFailedPrecondition, message);
     std::fprintf(stderr, "pnpctl: warning: %s\n", message.c_str());
   }
-  const ServiceEvaluation e = evaluate_through_services(
-      endpoints, parse_robot(robot, "--robot"), parse_object(object, "--object"), episodes, seed);
-  if (json) {
+  const std::uint64_t seed = args.seed;
+  const ServiceEvaluation e = evaluate_through_services(endpoints, world, args.episodes, seed);
+  if (args.json) {
     nlohmann::json out = {{"episodes", e.episodes},
                           {"successes", e.successes},
                           {"success_rate", e.success_rate()},
@@ -169,8 +171,8 @@ int evaluate_command(const Endpoints& endpoints, const std::string& robot,
     std::printf("%s\n", out.dump().c_str());
     return 0;
   }
-  std::printf("%s/%s: success %.3f over %d held-out episodes (seed %llu)", robot.c_str(),
-              object.c_str(), e.success_rate(), e.episodes, static_cast<unsigned long long>(seed));
+  std::printf("%s: success %.3f over %d held-out episodes (seed %llu)", where.c_str(),
+              e.success_rate(), e.episodes, static_cast<unsigned long long>(seed));
   if (!e.sequences.empty())
     std::printf(", most frequent choices %s x%d", e.sequences.front().first.c_str(),
                 e.sequences.front().second);

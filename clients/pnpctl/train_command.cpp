@@ -23,6 +23,7 @@ train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
       !a.algorithm.empty() ? a.algorithm : (a.role == "hlc" ? "a3c" : "ddpg_her"), "--algo"));
   r.set_robot(parse_robot(a.robot, "--robot"));
   r.set_object(parse_object(a.object, "--object"));
+  r.set_world(parse_world(a.world, "--world"));
   r.set_seed(a.seed);
   r.set_preset(a.preset);
   if (a.max_steps) r.mutable_stop()->set_max_steps(a.max_steps);

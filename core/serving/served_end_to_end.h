@@ -38,6 +38,7 @@ class ServedEndToEnd final : public ServedPolicy {
   std::vector<std::int64_t> checkpoint_ids() const override { return {checkpoint_id_}; }
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
+  sim::WorldProfile world() const override { return world_; }
   // One entry: the e2e actor.
   std::vector<BatchStats> batch_stats() const override { return {batcher_->stats()}; }
 
@@ -49,6 +50,7 @@ class ServedEndToEnd final : public ServedPolicy {
   std::int64_t checkpoint_id_;
   sim::Robot robot_;
   sim::ObjectShape object_;
+  sim::WorldProfile world_;
   std::shared_ptr<ActorBatcher> batcher_;
 };
 

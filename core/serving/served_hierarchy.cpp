@@ -81,7 +81,9 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
       robot_(sim::parse_robot(choreographer_.meta.robot, "choreographer checkpoint robot")),
       // The shape the hierarchy handles is the retract expert's: only retract (with its
       // gripper closure) is fine-tuned for a new shape, the rest may come from another.
-      object_(sim::parse_object(experts_[2].meta.object, "retract checkpoint object")) {
+      object_(sim::parse_object(experts_[2].meta.object, "retract checkpoint object")),
+      world_(
+          sim::parse_world_profile(choreographer_.meta.world, "choreographer checkpoint world")) {
   for (std::size_t k = 0; k < experts_.size(); ++k) {
     const auto& meta = experts_[k].meta;
     if (meta.role != kExpertRoles[k]) {

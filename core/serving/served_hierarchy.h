@@ -47,6 +47,7 @@ class ServedHierarchy final : public ServedPolicy {
   std::vector<std::int64_t> checkpoint_ids() const override;
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
+  sim::WorldProfile world() const override { return world_; }
   // Per expert (approach, manipulate, retract).
   std::vector<BatchStats> batch_stats() const override;
 
@@ -60,6 +61,7 @@ class ServedHierarchy final : public ServedPolicy {
   ServedIds ids_;
   sim::Robot robot_;
   sim::ObjectShape object_;
+  sim::WorldProfile world_;
 };
 
 }  // namespace pnp::serving

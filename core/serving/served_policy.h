@@ -22,6 +22,7 @@
 #include "sim/observation.h"
 #include "sim/robot.h"
 #include "sim/subtask.h"
+#include "sim/world_profile.h"
 #include "store/run_store.h"
 
 namespace pnp::serving {
@@ -92,6 +93,7 @@ class ServedPolicy : public std::enable_shared_from_this<ServedPolicy> {
   virtual std::vector<std::int64_t> checkpoint_ids() const = 0;
   virtual sim::Robot robot() const = 0;
   virtual sim::ObjectShape object() const = 0;
+  virtual sim::WorldProfile world() const = 0;
   // Per batched actor (batched_actors(kind()) order): requests and batches served so far.
   virtual std::vector<BatchStats> batch_stats() const = 0;
 

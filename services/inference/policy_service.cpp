@@ -152,6 +152,7 @@ grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
       for (auto& role : *response->mutable_roles()) {
         role.set_robot(to_proto(served->robot()));
         role.set_object(to_proto(served->object()));
+        role.set_world(to_proto(served->world()));
       }
     }
     return grpc::Status::OK;

@@ -49,10 +49,11 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   out.set_gemm_path(run.spec.gemm_path);
   out.set_parent_checkpoint_id(run.spec.parent_checkpoint_id.value_or(0));
   out.set_env_steps(run.env_steps);
-  const auto stop =
-      training::spec_from_json(nlohmann::json::parse(run.spec.config_json)["spec"]).stop;
-  out.set_max_steps(stop.max_steps);
-  out.set_target_success(stop.target_success);
+  const training::TrainingSpec spec =
+      training::spec_from_json(nlohmann::json::parse(run.spec.config_json)["spec"]);
+  out.set_max_steps(spec.stop.max_steps);
+  out.set_target_success(spec.stop.target_success);
+  out.set_world(to_proto(spec.world));
   out.set_last_success(run.last_success);
   if (run.last_score) out.set_last_score(*run.last_score);
   out.set_reached(run.reached);

@@ -194,17 +194,28 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
   const CliResult other_robot = run_pnpctl(
       dir, "pnpctl-evaluate-panda", command(words("evaluate --episodes 2 --robot panda")), 120s);
   ASSERT_TRUE(other_robot.status && other_robot.status->ok()) << other_robot.err;
-  EXPECT_NE(other_robot.err.find("pnpctl: warning: evaluating on panda/block, but the served "
-                                 "policy was trained elsewhere: approach (fetch/block)"),
-            std::string::npos)
+  EXPECT_NE(
+      other_robot.err.find("pnpctl: warning: evaluating on paper/panda/block, but the "
+                           "served policy was trained elsewhere: approach (paper/fetch/block)"),
+      std::string::npos)
       << other_robot.err;
   const CliResult strict =
       run_pnpctl(dir, "pnpctl-evaluate-strict",
                  command(words("evaluate --episodes 2 --robot panda --strict")), 120s);
   ASSERT_TRUE(strict.status);
   EXPECT_EQ(strict.status->describe(), "exit 1") << strict.err;
-  EXPECT_NE(strict.err.find("pnpctl: error: evaluating on panda/block"), std::string::npos)
+  EXPECT_NE(strict.err.find("pnpctl: error: evaluating on paper/panda/block"), std::string::npos)
       << strict.err;
+  // So does another world profile of the same robot.
+  const CliResult other_world =
+      run_pnpctl(dir, "pnpctl-evaluate-gym",
+                 command(words("evaluate --episodes 2 --world gym --strict")), 120s);
+  ASSERT_TRUE(other_world.status);
+  EXPECT_EQ(other_world.status->describe(), "exit 1") << other_world.err;
+  EXPECT_NE(other_world.err.find("evaluating on gym/fetch/block, but the served policy was "
+                                 "trained elsewhere: approach (paper/fetch/block)"),
+            std::string::npos)
+      << other_world.err;
 
   // The results as JSON.
   const auto results = nlohmann::json::parse(read_file(results_file), nullptr, false);

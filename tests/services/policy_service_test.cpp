@@ -68,6 +68,7 @@ std::vector<std::uint8_t> e2e_blob(std::uint64_t seed, bool learn_gripper = true
   meta.algorithm = "ddpg_her";
   meta.robot = "fetch";
   meta.object = "block";
+  meta.world = "gym";  // not the default, so that the status shows it is carried
   meta.hidden = config.hidden;
   meta.learn_gripper = learn_gripper;
   meta.seed = seed;
@@ -471,6 +472,7 @@ TEST_F(PolicyServiceTest, E2ePromotionThroughTheServiceServesAndReloads) {
   EXPECT_EQ(serving.roles(0).checkpoint_id(), first);
   EXPECT_EQ(serving.roles(0).robot(), common::v1::ROBOT_FETCH);
   EXPECT_EQ(serving.roles(0).object(), common::v1::OBJECT_SHAPE_BLOCK);
+  EXPECT_EQ(serving.roles(0).world(), common::v1::WORLD_GYM);
 
   // A session open on the first keeps it; a new e2e promotion serves new requests.
   grpc::ClientContext session_context;
@@ -525,7 +527,10 @@ TEST_F(PolicyServiceTest, HierarchyModeIgnoresAPromotedE2eCheckpoint) {
   ASSERT_TRUE(stub_->GetServingStatus(&status_context, {}, &serving).ok());
   EXPECT_TRUE(serving.ready());
   EXPECT_EQ(serving.roles_size(), 4);
-  for (const auto& role : serving.roles()) EXPECT_NE(role.role(), common::v1::ROLE_E2E);
+  for (const auto& role : serving.roles()) {
+    EXPECT_NE(role.role(), common::v1::ROLE_E2E);
+    EXPECT_EQ(role.world(), common::v1::WORLD_PAPER) << "the choreographer's world";
+  }
 }
 
 TEST(ServedEndToEnd, RefusesACheckpointOfAnotherRoleNamingIt) {

@@ -27,7 +27,7 @@ void add(MethodRun& run, std::string role, rl::TrainingResult result) {
 
 MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm,
                         std::uint64_t seed, const ExperimentSettings& s, const Progress& progress) {
-  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object));
+  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object, s.world));
   MethodRun run{method, seed, {}, true, 0, 0, -1};
   std::vector<std::unique_ptr<rl::LearnedExpert>> experts;
   for (sim::Subtask subtask : sim::kAllSubtasks) {
@@ -70,7 +70,7 @@ MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm
 
 MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
                          const Progress& progress) {
-  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object));
+  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object, s.world));
   MethodRun run{"e2e", seed, {}, true, 0, 0, -1};
   rl::SubtaskTrainingConfig config;
   config.algorithm = rl::ExpertAlgorithm::kEndToEnd;

@@ -13,12 +13,14 @@
 #include "rl/subtask_trainer.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
+#include "sim/world_profile.h"
 
 namespace pnp::tools {
 
 struct ExperimentSettings {
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
+  sim::WorldProfile world = sim::WorldProfile::kPaper;
   rl::StopRule expert_stop, hlc_stop, e2e_stop;
   rl::DdpgHerConfig ddpg;  // experts and the end-to-end baseline (BC uses its schedule)
   std::size_t threads = 0;
