@@ -143,13 +143,14 @@ double time_vec_env(VecEnv& vec, int steps_per_env, std::uint64_t seed) {
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark environment steps per second against raw MuJoCo physics",
                "pnp-bench-env"};
-  std::string robot = "fetch", object = "block";
+  std::string robot = "fetch", object = "block", world_name = "paper";
   int episodes = 20, rounds = 5;
   std::size_t threads = 0;
   std::uint64_t seed = 1;
   bool json = false;
   app.add_option("--robot", robot)->capture_default_str();
   app.add_option("--object", object)->capture_default_str();
+  app.add_option("--world", world_name, "world profile: paper or gym")->capture_default_str();
   app.add_option("--episodes", episodes, "episodes per round (50 steps each)")
       ->capture_default_str();
   app.add_option("--rounds", rounds, "alternating env/raw rounds; the best round counts")
@@ -161,7 +162,8 @@ int main(int argc, char** argv) {
     pnp::require_positive(episodes, "--episodes");
     pnp::require_positive(rounds, "--rounds");
     const auto world =
-        WorldModel::load(parse_robot(robot, "--robot"), parse_object(object, "--object"));
+        WorldModel::load(parse_robot(robot, "--robot"), parse_object(object, "--object"),
+                         pnp::sim::parse_world_profile(world_name, "--world"));
     PickPlaceEnv env(world);
     pnp::sim::DataPtr raw = pnp::sim::make_data(world->mj());
     double best_env = 1e300, best_raw = 1e300;
@@ -190,6 +192,7 @@ int main(int argc, char** argv) {
     nlohmann::json out = {
         {"robot", robot},
         {"object", object},
+        {"world", world_name},
         {"seed", seed},
         {"episodes_per_round", episodes},
         {"rounds", rounds},

@@ -43,7 +43,7 @@ ControllerStandIn::CallerLock::~CallerLock() {
 }
 
 ControllerStandIn::ControllerStandIn(const StandInOptions& options)
-    : options_(options), arm_(sim::Robot::kPanda, options.object, options.arm) {
+    : options_(options), arm_(sim::Robot::kPanda, options.object, options.world, options.arm) {
   if (options_.base_frame_id.empty()) {
     throw_invalid_argument("base_frame_id", "a frame name", "\"\"");
   }

@@ -83,12 +83,13 @@ const ArmControllerOptions& validated(const ArmControllerOptions& o) {
   return o;
 }
 
-std::shared_ptr<const sim::WorldModel> load_world(sim::Robot robot, sim::ObjectShape object) {
+std::shared_ptr<const sim::WorldModel> load_world(sim::Robot robot, sim::ObjectShape object,
+                                                  sim::WorldProfile world) {
   // The limits, base body and gains are the Panda's; Fetch has no real counterpart here.
   if (robot != sim::Robot::kPanda) {
     throw_invalid_argument("robot", "panda", std::string(sim::robot_name(robot)));
   }
-  return sim::WorldModel::load(robot, object);
+  return sim::WorldModel::load(robot, object, world);
 }
 
 int require_id(const mjModel* m, mjtObj type, const char* name) {
@@ -109,9 +110,9 @@ Pose SimulatedArm::Segment::at(double time_s) const {
           from_orientation.slerp(s, to_orientation)};
 }
 
-SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object,
+SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
                            const ArmControllerOptions& options)
-    : options_(validated(options)), world_(load_world(robot, object)) {
+    : options_(validated(options)), world_(load_world(robot, object, world)) {
   // A private copy of the training model: the weld that drags the gripper to its mocap
   // target is switched off (the joints are torque-driven instead) and the step is the
   // controller's 1 ms.
@@ -173,10 +174,11 @@ Episode SimulatedArm::reset(std::uint64_t seed) {
   object_qpos[4] = object_qpos[5] = object_qpos[6] = 0;
   mju_zero(d->qvel + ids.object_dof, 6);
   for (int k = 0; k < 3; ++k) {
-    d->mocap_pos[3 * ids.gripper_mocap + k] = sim::layout::kGripperStart(k);
+    d->mocap_pos[3 * ids.gripper_mocap + k] = world_->parameters().gripper_start()(k);
     d->mocap_pos[3 * ids.target_mocap + k] = layout.goal(k);
   }
-  set_gripper(max_gripper_width_m());  // open, as the environment's fingers start
+  // As the environment's fingers start: open in the paper world, closed in gym.
+  set_gripper(world_->parameters().fingers_open_at_reset ? max_gripper_width_m() : 0.0);
   mj_forward(m, d);
 
   episode_ = {layout.goal, base_from_world_.apply(layout.goal)};

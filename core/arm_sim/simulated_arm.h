@@ -30,6 +30,7 @@
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/world_model.h"
+#include "sim/world_profile.h"
 
 namespace pnp::arm_sim {
 
@@ -128,7 +129,9 @@ class SimulatedArm {
  public:
   // Only Robot::kPanda (INVALID_ARGUMENT otherwise, or for non-positive options). Starts
   // in the episode of seed 0.
-  SimulatedArm(sim::Robot robot, sim::ObjectShape object, const ArmControllerOptions& options = {});
+  SimulatedArm(sim::Robot robot, sim::ObjectShape object,
+               sim::WorldProfile world = sim::WorldProfile::kPaper,
+               const ArmControllerOptions& options = {});
   SimulatedArm(const SimulatedArm&) = delete;
   SimulatedArm& operator=(const SimulatedArm&) = delete;
 

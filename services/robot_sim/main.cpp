@@ -20,10 +20,13 @@ int main(int argc, char** argv) {
   std::string address = "127.0.0.1:50070";
   std::string object = "block";
   std::string clock = "realtime";
+  std::string world = "paper";
   std::string metrics_address;
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();
   app.add_option("--object", object, "object on the table: block, cylinder or small_block")
+      ->capture_default_str();
+  app.add_option("--world", world, "world profile: paper or gym (docs/SIMULATION.md)")
       ->capture_default_str();
   app.add_option("--clock", clock,
                  "realtime: the 1 kHz loop runs on the wall clock, as an arm does; lockstep: "
@@ -36,6 +39,7 @@ int main(int argc, char** argv) {
   try {
     pnp::arm_sim::StandInOptions options;
     options.object = pnp::sim::parse_object(object, "--object");
+    options.world = pnp::sim::parse_world_profile(world, "--world");
     options.clock = clock == "lockstep" ? pnp::arm_sim::ClockMode::kLockstep
                                         : pnp::arm_sim::ClockMode::kRealTime;
     pnp::arm_sim::ControllerStandIn arm(options);
@@ -49,9 +53,11 @@ int main(int argc, char** argv) {
                                              "pnp.robot.v1.SimulatedSceneService"},
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address});
-    return serve_until_terminated(
-        runtime, "robot_sim", [] {}, std::chrono::seconds(1),
-        {{"object", object}, {"clock", clock}, {"base_frame", arm.base_frame_id()}});
+    return serve_until_terminated(runtime, "robot_sim", [] {}, std::chrono::seconds(1),
+                                  {{"object", object},
+                                   {"world", world},
+                                   {"clock", clock},
+                                   {"base_frame", arm.base_frame_id()}});
   } catch (const pnp::Error& e) {
     log_event("robot_sim", "fatal", {{"error", e.what()}});
     std::fprintf(stderr, "pnp-robot-sim: %s\n", e.what());

@@ -25,8 +25,9 @@ using sim::Robot;
 
 const ArmControllerOptions kDefaults;
 
-SimulatedArm make_arm(ObjectShape object = ObjectShape::kBlock) {
-  return SimulatedArm(Robot::kPanda, object);
+SimulatedArm make_arm(ObjectShape object = ObjectShape::kBlock,
+                      sim::WorldProfile world = sim::WorldProfile::kPaper) {
+  return SimulatedArm(Robot::kPanda, object, world);
 }
 
 // Checks the measured joints against the model's position limits and the Panda's velocity
@@ -99,9 +100,10 @@ TEST(SimulatedArm, BaseFrameIsPandaLink0) {
             1e-12);
 }
 
-TEST(SimulatedArm, ResetMatchesThePickPlaceEnvironmentForTheSameSeed) {
-  SimulatedArm arm = make_arm();
-  sim::PickPlaceEnv env(sim::WorldModel::load(Robot::kPanda, ObjectShape::kBlock));
+// The arm starts each episode where the environment does, in the world it was built for.
+void expect_reset_matches_the_environment(sim::WorldProfile world) {
+  SimulatedArm arm = make_arm(ObjectShape::kBlock, world);
+  sim::PickPlaceEnv env(sim::WorldModel::load(Robot::kPanda, ObjectShape::kBlock, world));
   for (const std::uint64_t seed :
        std::array<std::uint64_t, 4>{0, 1, derive_seed(2024, 3), derive_seed(5, 17)}) {
     const Episode episode = arm.reset(seed);
@@ -114,6 +116,13 @@ TEST(SimulatedArm, ResetMatchesThePickPlaceEnvironmentForTheSameSeed) {
     EXPECT_EQ(s.mode, ArmMode::kIdle);
     EXPECT_EQ(s.commanded_base.position_m, s.tcp_base.position_m);
     EXPECT_LT((episode.goal_base - arm.base_from_world().apply(episode.goal_world)).norm(), 1e-12);
+  }
+}
+
+TEST(SimulatedArm, ResetMatchesThePickPlaceEnvironmentForTheSameSeedInEveryWorld) {
+  for (const sim::WorldProfile world : sim::kAllWorldProfiles) {
+    SCOPED_TRACE(sim::world_profile_name(world));
+    expect_reset_matches_the_environment(world);
   }
 }
 
@@ -243,7 +252,7 @@ TEST(SimulatedArm, RefusesABadConfiguration) {
   ArmControllerOptions options;
   options.natural_frequency_rad_per_s = -1;
   try {
-    SimulatedArm arm(Robot::kPanda, ObjectShape::kBlock, options);
+    SimulatedArm arm(Robot::kPanda, ObjectShape::kBlock, sim::WorldProfile::kPaper, options);
     FAIL() << "negative gain";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
@@ -313,8 +322,9 @@ TransferOutcome run_transfer_episode(SimulatedArm& arm, std::uint64_t seed) {
 }
 
 double transfer_success_rate(int episodes, std::uint64_t seed,
-                             ObjectShape object = ObjectShape::kBlock) {
-  SimulatedArm arm = make_arm(object);
+                             ObjectShape object = ObjectShape::kBlock,
+                             sim::WorldProfile world = sim::WorldProfile::kPaper) {
+  SimulatedArm arm = make_arm(object, world);
   int successes = 0, refused = 0;
   double seconds = 0;
   for (int i = 0; i < episodes; ++i) {
@@ -327,8 +337,10 @@ double transfer_success_rate(int episodes, std::uint64_t seed,
   }
   const double rate = static_cast<double>(successes) / episodes;
   std::printf(
-      "transfer, %s: %d/%d episodes succeeded (%.3f), %d targets refused, %.3f ms per 40 ms "
+      "transfer, %s world, %s: %d/%d episodes succeeded (%.3f), %d targets refused, %.3f ms per 40 "
+      "ms "
       "cycle of advance()\n",
+      std::string(sim::world_profile_name(world)).c_str(),
       std::string(sim::object_name(object)).c_str(), successes, episodes, rate, refused,
       1e3 * seconds / (episodes * sim::layout::kEpisodeSteps));
   return rate;
@@ -338,11 +350,19 @@ TEST(SimulatedArm, ScriptedExpertsTransferFromTheMocapEnvironment) {
   EXPECT_GE(transfer_success_rate(20, 2024), 0.9);
 }
 
+// gym's heavier block (2 kg) and colliding links, on the same joint-space controller.
+TEST(SimulatedArm, ScriptedExpertsTransferFromTheMocapEnvironmentInTheGymWorld) {
+  EXPECT_GE(transfer_success_rate(20, 2024, ObjectShape::kBlock, sim::WorldProfile::kGym), 0.9);
+}
+
 // The report's longer run (~45 s, every object): ctest skips it; run with
 // --gtest_also_run_disabled_tests.
 TEST(SimulatedArm, DISABLED_ScriptedExpertsTransferOverHundredEpisodes) {
-  for (ObjectShape object : sim::kAllObjectShapes) {
-    EXPECT_GE(transfer_success_rate(100, 2024, object), 0.9) << sim::object_name(object);
+  for (const sim::WorldProfile world : sim::kAllWorldProfiles) {
+    for (ObjectShape object : sim::kAllObjectShapes) {
+      EXPECT_GE(transfer_success_rate(100, 2024, object, world), 0.9)
+          << sim::world_profile_name(world) << " " << sim::object_name(object);
+    }
   }
 }
 
