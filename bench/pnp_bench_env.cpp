@@ -143,7 +143,8 @@ double time_vec_env(VecEnv& vec, int steps_per_env, std::uint64_t seed) {
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark environment steps per second against raw MuJoCo physics",
                "pnp-bench-env"};
-  std::string robot = "fetch", object = "block", world_name = "paper";
+  std::string robot = "fetch", object = "block";
+  std::string world_name{pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile)};
   int episodes = 20, rounds = 5;
   std::size_t threads = 0;
   std::uint64_t seed = 1;

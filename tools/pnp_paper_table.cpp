@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   s.ddpg = preset.ddpg;
   s.ddpg.learn_gripper = !preset.scripted_gripper;
   s.a3c = preset.a3c;
-  std::string world = "paper";
+  std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   app.add_option("--world", world, "world profile: paper or gym (docs/SIMULATION.md)")
       ->capture_default_str();
   app.add_option("--seeds", seeds, "seeds per method")->capture_default_str();

@@ -156,7 +156,7 @@ void trace_episode(pnp::sim::WorldProfile world, pnp::sim::Robot robot,
 int main(int argc, char** argv) {
   CLI::App app{"Evaluate the scripted approach -> manipulate -> retract pipeline",
                "pnp-scripted-eval"};
-  std::string world = "paper";
+  std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   std::string robot = "fetch";
   std::string object = "block";
   long long episodes = 100;

@@ -28,7 +28,8 @@ using namespace pnp;
 
 struct Options {
   training::TrainingSpec spec;
-  std::string robot = "fetch", object = "block", world = "paper", out = "runs/latest";
+  std::string robot = "fetch", object = "block", out = "runs/latest";
+  std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
   std::string init, experts, prefix, activation, preset;
   bool json = false, quiet = false, show_preset = false;
   std::size_t threads = 0;

@@ -19,7 +19,7 @@ struct TrainArgs {
   std::string role = "approach";
   std::string algorithm;  // empty: ddpg_her for experts and e2e, a3c for hlc
   std::string robot = "fetch", object = "block";
-  std::string world = "paper";                   // docs/SIMULATION.md, "World profiles"
+  std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};  // docs/SIMULATION.md
   std::string preset{training::kDefaultPreset};  // training/preset.h; unset fields take its values
   std::uint64_t seed = 0;
   long long max_steps = 0;
@@ -58,7 +58,8 @@ int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);
 struct PredictArgs {
   std::vector<double> observation, goal;  // given directly, or
   std::uint64_t seed = 0;                 // the first observation of the sim's episode
-  std::string robot = "fetch", object = "block", world = "paper";
+  std::string robot = "fetch", object = "block";
+  std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
 };
 int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 // Checks the named services (sim, approach, manipulate, retract, hlc, e2e, inference);
@@ -66,7 +67,8 @@ int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
                    double timeout_s);
 struct EvaluateArgs {
-  std::string robot = "fetch", object = "block", world = "paper";
+  std::string robot = "fetch", object = "block";
+  std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
   int episodes = 100;
   std::uint64_t seed = 424242;  // the held-out episodes' seed (no training run uses it)
   bool json = false;

@@ -30,7 +30,7 @@ enum class ClockMode { kRealTime, kLockstep };
 
 struct StandInOptions {
   sim::ObjectShape object = sim::ObjectShape::kBlock;
-  sim::WorldProfile world = sim::WorldProfile::kPaper;  // the simulation's world profile
+  sim::WorldProfile world = sim::kDefaultWorldProfile;  // the simulation's world profile
   ClockMode clock = ClockMode::kRealTime;
   std::string base_frame_id = "panda_link0";
   double default_lease_timeout_s = 1.0;  // when a client asks for none

@@ -24,6 +24,10 @@ inline constexpr std::array<WorldProfile, 2> kAllWorldProfiles{WorldProfile::kPa
                                                                WorldProfile::kGym};
 
 std::string_view world_profile_name(WorldProfile profile);
+// The world a tool, service or request uses unless told otherwise: gym's, the benchmark
+// users know. (Records from before world profiles were all made in the paper world.)
+inline constexpr WorldProfile kDefaultWorldProfile = WorldProfile::kGym;
+
 // Parses "paper" or "gym"; anything else is an INVALID_ARGUMENT naming `field`.
 WorldProfile parse_world_profile(std::string_view name, std::string_view field = "world");
 

@@ -130,7 +130,8 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
   read(j, "object", object, "");
   s.robot = sim::parse_robot(robot, "robot");
   s.object = sim::parse_object(object, "object");
-  std::string world(sim::world_profile_name(s.world));
+  // A spec without a world was stored before world profiles: it trained in the paper world.
+  std::string world(sim::world_profile_name(sim::WorldProfile::kPaper));
   read(j, "world", world, "");
   s.world = sim::parse_world_profile(world, "world");
   read(j, "seed", s.seed, "");

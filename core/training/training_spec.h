@@ -27,7 +27,7 @@ struct TrainingSpec {
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
   // The world profile (sim/world_profile.h); runs stored before profiles existed: paper.
-  sim::WorldProfile world = sim::WorldProfile::kPaper;
+  sim::WorldProfile world = sim::kDefaultWorldProfile;
   std::uint64_t seed = 0;
   // The preset the spec started from, before any single value was overridden ("": a run
   // stored before presets existed).

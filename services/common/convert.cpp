@@ -45,13 +45,13 @@ sim::ObjectShape from_proto(common::v1::ObjectShape object, std::string_view fie
 sim::WorldProfile from_proto(common::v1::World world, std::string_view field) {
   switch (world) {
     case common::v1::WORLD_UNSPECIFIED:
+      return sim::kDefaultWorldProfile;
     case common::v1::WORLD_PAPER:
       return sim::WorldProfile::kPaper;
     case common::v1::WORLD_GYM:
       return sim::WorldProfile::kGym;
     default:
-      throw_invalid_argument(field, "WORLD_PAPER or WORLD_GYM (unset: paper)",
-                             std::to_string(world));
+      throw_invalid_argument(field, "WORLD_PAPER or WORLD_GYM (unset: gym)", std::to_string(world));
   }
 }
 

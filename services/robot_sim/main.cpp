@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   std::string address = "127.0.0.1:50070";
   std::string object = "block";
   std::string clock = "realtime";
-  std::string world = "paper";
+  std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   std::string metrics_address;
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();

@@ -33,6 +33,7 @@ EpisodeOptions episode(std::uint64_t seed, bool dry_run = false) {
 arm_sim::StandInOptions lockstep() {
   arm_sim::StandInOptions options;
   options.clock = arm_sim::ClockMode::kLockstep;
+  options.world = sim::WorldProfile::kPaper;  // the checked-in hierarchy's world
   return options;
 }
 

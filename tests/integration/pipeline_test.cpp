@@ -189,31 +189,31 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
                                      << pipeline.out << pipeline.err;
   EXPECT_NE(pipeline.out.find("held-out through the services"), std::string::npos) << pipeline.out;
 
-  // The hierarchy was trained on the Fetch arm: evaluating it on the Panda warns, and
+  // The hierarchy was trained on the Fetch arm in the default (gym) world: evaluating it on
+  // the Panda warns, and
   // --strict refuses.
   const CliResult other_robot = run_pnpctl(
       dir, "pnpctl-evaluate-panda", command(words("evaluate --episodes 2 --robot panda")), 120s);
   ASSERT_TRUE(other_robot.status && other_robot.status->ok()) << other_robot.err;
-  EXPECT_NE(
-      other_robot.err.find("pnpctl: warning: evaluating on paper/panda/block, but the "
-                           "served policy was trained elsewhere: approach (paper/fetch/block)"),
-      std::string::npos)
+  EXPECT_NE(other_robot.err.find("pnpctl: warning: evaluating on gym/panda/block, but the "
+                                 "served policy was trained elsewhere: approach (gym/fetch/block)"),
+            std::string::npos)
       << other_robot.err;
   const CliResult strict =
       run_pnpctl(dir, "pnpctl-evaluate-strict",
                  command(words("evaluate --episodes 2 --robot panda --strict")), 120s);
   ASSERT_TRUE(strict.status);
   EXPECT_EQ(strict.status->describe(), "exit 1") << strict.err;
-  EXPECT_NE(strict.err.find("pnpctl: error: evaluating on paper/panda/block"), std::string::npos)
+  EXPECT_NE(strict.err.find("pnpctl: error: evaluating on gym/panda/block"), std::string::npos)
       << strict.err;
   // So does another world profile of the same robot.
   const CliResult other_world =
-      run_pnpctl(dir, "pnpctl-evaluate-gym",
-                 command(words("evaluate --episodes 2 --world gym --strict")), 120s);
+      run_pnpctl(dir, "pnpctl-evaluate-paper",
+                 command(words("evaluate --episodes 2 --world paper --strict")), 120s);
   ASSERT_TRUE(other_world.status);
   EXPECT_EQ(other_world.status->describe(), "exit 1") << other_world.err;
-  EXPECT_NE(other_world.err.find("evaluating on gym/fetch/block, but the served policy was "
-                                 "trained elsewhere: approach (paper/fetch/block)"),
+  EXPECT_NE(other_world.err.find("evaluating on paper/fetch/block, but the served policy was "
+                                 "trained elsewhere: approach (gym/fetch/block)"),
             std::string::npos)
       << other_world.err;
 

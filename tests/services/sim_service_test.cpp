@@ -70,7 +70,8 @@ TEST_F(SimServiceTest, TheSameSeedGivesTheSameEpisodesAsTheCore) {
     EXPECT_EQ(a.states(k).episode_goal().x_m(), b.states(k).episode_goal().x_m());
     // Environment k's first episode is the core's episode derive_seed(derive_seed(9, k), 0).
     pnp::sim::PickPlaceEnv env(
-        pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock));
+        pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock,
+                                   pnp::sim::kDefaultWorldProfile));  // unset world: default
     env.reset(derive_seed(derive_seed(9, static_cast<std::uint64_t>(k)), 0));
     EXPECT_EQ(a.states(k).episode_goal().y_m(), env.episode_goal().y());
     EXPECT_EQ(a.states(k).observation().values(3), env.observation()(3));
@@ -91,7 +92,8 @@ TEST_F(SimServiceTest, ExplicitEpisodeSeedsGiveTheCoresEpisodes) {
   ASSERT_TRUE(stub_->Reset(&c, r, &out).ok());
   ASSERT_EQ(out.states_size(), 2);
   pnp::sim::PickPlaceEnv env(
-      pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock));
+      pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock,
+                                   pnp::sim::kDefaultWorldProfile));  // unset world: default
   for (int i = 0; i < 2; ++i) {
     env.reset(static_cast<std::uint64_t>(11 + i));
     EXPECT_EQ(out.states(i).index(), i == 0 ? 2 : 0);

@@ -20,7 +20,7 @@ namespace pnp::tools {
 struct ExperimentSettings {
   sim::Robot robot = sim::Robot::kFetch;
   sim::ObjectShape object = sim::ObjectShape::kBlock;
-  sim::WorldProfile world = sim::WorldProfile::kPaper;
+  sim::WorldProfile world = sim::kDefaultWorldProfile;
   rl::StopRule expert_stop, hlc_stop, e2e_stop;
   rl::DdpgHerConfig ddpg;  // experts and the end-to-end baseline (BC uses its schedule)
   std::size_t threads = 0;
