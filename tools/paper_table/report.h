@@ -2,6 +2,7 @@
 // Writes the results of the Table I experiments: docs/RESULTS.md (tables with the paper's
 // numbers beside ours), a CSV of every learning curve, and an SVG of the curves.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,18 @@ struct ReportContext {
 };
 
 std::string results_markdown(const std::vector<MethodRun>& runs, const ReportContext& context);
+
+// One cell of the --grid matrix: a world and a preset, its runs on fetch and the Panda's.
+struct GridCell {
+  std::string world, preset;
+  bool uses_demonstrations = false;
+  std::string results_path;  // the cell's RESULTS.md, relative to the grid's
+  std::vector<MethodRun> runs;
+  std::optional<MethodRun> panda;
+};
+// The matrix on one page: per cell, each method's total steps (mean ± sd, k/n reached)
+// and the DDPG+HER hierarchies' held-out success.
+std::string grid_markdown(const std::vector<GridCell>& cells, const ReportContext& context);
 std::string curves_csv(const std::vector<MethodRun>& runs);
 std::string curves_svg(const std::vector<MethodRun>& runs);
 
