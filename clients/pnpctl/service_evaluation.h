@@ -31,7 +31,7 @@ void require_evaluation_episodes(int episodes);
 struct ServiceWorld {
   common::v1::Robot robot = common::v1::ROBOT_FETCH;
   common::v1::ObjectShape object = common::v1::OBJECT_SHAPE_BLOCK;
-  common::v1::World world = common::v1::WORLD_PAPER;
+  common::v1::World world = common::v1::WORLD_UNSPECIFIED;  // the platform's default, gym
 };
 
 ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const ServiceWorld& world,
