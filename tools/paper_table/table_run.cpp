@@ -64,11 +64,12 @@ TableResult run_table(const TablePlan& plan, ReportContext context,
     write_text(out / "results" / "curves.csv", curves_csv(runs));
     write_text(out / "results" / "learning_curves.svg", curves_svg(runs));
   };
-  const int rounds = std::max(plan.seeds, plan.baseline_seeds);
+  const int rounds =
+      plan.skip_ddpg_her ? plan.baseline_seeds : std::max(plan.seeds, plan.baseline_seeds);
   for (int k = 0; k < rounds; ++k) {
     const std::uint64_t seed = plan.first_seed + static_cast<std::uint64_t>(k);
     context.seeds.push_back(seed);
-    if (k < plan.seeds) {
+    if (!plan.skip_ddpg_her && k < plan.seeds) {
       runs.push_back(run_hierarchy("ddpg_her", rl::ExpertAlgorithm::kDdpgHer, seed, s, progress));
       write_all();
     }
@@ -87,7 +88,7 @@ TableResult run_table(const TablePlan& plan, ReportContext context,
       write_all();
     }
   }
-  if (!plan.skip_panda) {
+  if (!plan.skip_panda && !plan.skip_ddpg_her) {
     ExperimentSettings panda = s;
     panda.robot = sim::Robot::kPanda;
     result.panda =

@@ -1,0 +1,253 @@
+// pnp-shape-transfer: the paper's transfer step, through the platform. A hierarchy is
+// trained on the Panda with the block; for each new shape only the retract expert is
+// fine-tuned from the block's (the paper's row), and optionally more roles (--extra-adapt,
+// an extra row); the end-to-end baseline is trained on the block. Every shape is then
+// played through the robot gateway on the simulated Panda controller (lockstep clock),
+// with the inference service serving each policy from a fresh store:
+//   (a) hierarchy with the shape's fine-tuned retract,  (a+) with the extra roles too,
+//   (b) the block hierarchy as it is,                   (c) end-to-end, trained on block.
+// Writes OUT/shape_transfer.json (every figure, seed and setting), OUT/SHAPE_TRANSFER.md
+// (the table) and the checkpoints under OUT/checkpoints; prints the table.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "bench/shape_transfer/gateway_cell.h"
+#include "bench/shape_transfer/transfer_report.h"
+#include "bench/shape_transfer/transfer_training.h"
+#include "build_info.h"
+#include "common/error.h"
+#include "common/validate.h"
+#include "nn/checkpoint_io.h"
+#include "tools/common/cli.h"
+#include "tools/common/preset_option.h"
+#include "tools/common/progress_line.h"
+
+namespace {
+
+using namespace pnp;
+namespace fs = std::filesystem;
+
+struct Options {
+  std::string preset, world{sim::world_profile_name(sim::kDefaultWorldProfile)};
+  bool show_preset = false, skip_e2e = false;
+  std::uint64_t seed = 0, gateway_seed = 880000;
+  int episodes = 200;
+  std::vector<std::string> shapes{"cylinder", "small_block"}, extra_adapt;
+  long long fine_tune_max_steps = 60'000, e2e_max_steps = 316'000;
+  std::string hierarchy, e2e_checkpoint, config = PNP_DEFAULT_GATEWAY_CONFIG;
+  std::string out = "runs/shape-transfer";
+  std::size_t threads = 0;
+  std::vector<int> hidden;
+};
+
+void write_text(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+void save_hierarchy(const fs::path& dir, const bench::HierarchyBlobs& blobs) {
+  fs::create_directories(dir);
+  for (std::size_t k = 0; k < bench::kHierarchyRoles.size(); ++k)
+    nn::write_file_atomically((dir / (std::string(bench::kHierarchyRoles[k]) + ".ckpt")).string(),
+                              blobs.roles[k]);
+}
+
+bench::HierarchyBlobs load_hierarchy(const fs::path& dir) {
+  bench::HierarchyBlobs blobs;
+  for (std::size_t k = 0; k < bench::kHierarchyRoles.size(); ++k) {
+    const fs::path file = dir / (std::string(bench::kHierarchyRoles[k]) + ".ckpt");
+    if (!fs::exists(file))
+      throw_invalid_argument("--hierarchy",
+                             "a directory with approach, manipulate, retract and "
+                             "hlc .ckpt files (pnp-train --out)",
+                             "no file " + file.string());
+    blobs.roles[k] = nn::read_file(file.string());
+  }
+  return blobs;
+}
+
+void validate(const Options& o) {
+  require_positive(o.episodes, "--episodes");
+  require_positive(o.fine_tune_max_steps, "--fine-tune-max-steps");
+  require_positive(o.e2e_max_steps, "--e2e-max-steps");
+  for (const auto& s : o.shapes) {
+    if (sim::parse_object(s, "--shapes") == sim::ObjectShape::kBlock)
+      throw_invalid_argument("--shapes", "shapes other than block (block is the trained one)", s);
+  }
+  for (const auto& r : o.extra_adapt) {
+    if (std::find(bench::kHierarchyRoles.begin(), bench::kHierarchyRoles.end(), r) ==
+        bench::kHierarchyRoles.end())
+      throw_invalid_argument("--extra-adapt", "approach, manipulate, retract or hlc", r);
+  }
+  if (o.gateway_seed < 880000)
+    throw_invalid_argument("--gateway-seed", "a held-out seed >= 880000 (never trained on)",
+                           std::to_string(o.gateway_seed));
+}
+
+void run(const Options& o, const training::Preset& preset) {
+  validate(o);
+  const fs::path out(o.out);
+  const sim::WorldProfile world = sim::parse_world_profile(o.world, "--world");
+  const robot::GatewayConfig config = robot::GatewayConfig::load(o.config);
+  bench::TransferTraining t{&preset,
+                            world,
+                            o.seed,
+                            o.fine_tune_max_steps,
+                            o.threads,
+                            o.hidden,
+                            [](const std::string& label, const rl::CurvePoint& p) {
+                              tools::print_progress(stderr, label, p);
+                            }};
+  // The extra row's roles in training order, retract among them.
+  std::vector<std::string> extra;
+  for (const char* role : bench::kHierarchyRoles) {
+    if (std::string(role) == "retract" ||
+        std::find(o.extra_adapt.begin(), o.extra_adapt.end(), role) != o.extra_adapt.end())
+      extra.push_back(role);
+  }
+  // Roles after retract only: the extra row starts from row (a)'s fine-tuned retract.
+  const bool extends_row_a = extra.front() == "retract";
+
+  std::vector<bench::RoleTraining> block_log, e2e_log;
+  const bench::HierarchyBlobs block = o.hierarchy.empty()
+                                          ? bench::train_block_hierarchy(t, block_log)
+                                          : load_hierarchy(o.hierarchy);
+  save_hierarchy(out / "checkpoints" / "block", block);
+  training::Blob e2e;
+  if (!o.skip_e2e) {
+    e2e = o.e2e_checkpoint.empty() ? bench::train_end_to_end(t, o.e2e_max_steps, e2e_log)
+                                   : nn::read_file(o.e2e_checkpoint);
+    nn::write_file_atomically((out / "checkpoints" / "e2e.ckpt").string(), e2e);
+  }
+
+  std::vector<bench::TransferColumn> columns{{"fine_tuned", "(a) hierarchy, retract fine-tuned"}};
+  if (!o.extra_adapt.empty()) {
+    std::string names;
+    for (const auto& r : extra) names += (names.empty() ? "" : " + ") + r;
+    columns.push_back({"fine_tuned_extra", "(a+) hierarchy, " + names + " fine-tuned"});
+  }
+  columns.push_back({"block_hierarchy", "(b) block hierarchy, not fine-tuned"});
+  if (!o.skip_e2e) columns.push_back({"e2e", "(c) end-to-end, trained on block"});
+
+  nlohmann::json cells, fine_tuning;
+  std::vector<std::string> shapes{"block"};
+  shapes.insert(shapes.end(), o.shapes.begin(), o.shapes.end());
+  auto play = [&](const std::string& shape, const std::string& key,
+                  const bench::ServedCheckpoints& served) {
+    bench::GatewayCellSpec cell{
+        sim::parse_object(shape),           world, &config, o.episodes, o.gateway_seed,
+        out / "cells" / (shape + "-" + key)};
+    cells[shape][key] = bench::play_gateway_cell(cell, served);
+    std::fprintf(stderr, "gateway %-12s %-17s %d/%d\n", shape.c_str(), key.c_str(),
+                 cells[shape][key]["successes"].get<int>(), o.episodes);
+  };
+  for (const auto& shape : shapes) {
+    const sim::ObjectShape object = sim::parse_object(shape);
+    play(shape, "block_hierarchy", {serving::PolicyKind::kHierarchy, block, {}});
+    if (!o.skip_e2e) play(shape, "e2e", {serving::PolicyKind::kEndToEnd, {}, e2e});
+    if (object == sim::ObjectShape::kBlock) continue;  // (a) = (b): trained on it
+    std::vector<bench::RoleTraining> log;
+    const auto tuned = bench::fine_tune_for_shape(t, block, object, {"retract"}, log);
+    save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned"), tuned);
+    play(shape, "fine_tuned", {serving::PolicyKind::kHierarchy, tuned, {}});
+    if (!o.extra_adapt.empty()) {
+      std::vector<bench::RoleTraining> extra_log;
+      const auto tuned_extra =
+          extends_row_a ? bench::fine_tune_for_shape(t, tuned, object,
+                                                     {extra.begin() + 1, extra.end()}, extra_log)
+                        : bench::fine_tune_for_shape(t, block, object, extra, extra_log);
+      save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned_extra"), tuned_extra);
+      play(shape, "fine_tuned_extra", {serving::PolicyKind::kHierarchy, tuned_extra, {}});
+      for (auto& r : extra_log) r.role = "(a+) " + r.role;
+      log.insert(log.end(), extra_log.begin(), extra_log.end());
+    }
+    fine_tuning[shape] = bench::training_json(log);
+  }
+
+  const std::string table = bench::transfer_markdown(shapes, columns, cells, fine_tuning);
+  nlohmann::json doc{
+      {"code_commit", kCodeCommit},
+      {"settings",
+       {{"preset", preset.name},
+        {"uses_demonstrations", preset.uses_demonstrations},
+        {"world", o.world},
+        {"robot", "panda"},
+        {"episodes_per_cell", o.episodes},
+        {"fine_tune_max_steps", o.fine_tune_max_steps},
+        {"extra_adapt", extra},
+        {"hidden",
+         o.hidden.empty() ? nlohmann::json(preset.ddpg.hidden) : nlohmann::json(o.hidden)},
+        {"e2e_max_steps", o.skip_e2e ? nlohmann::json(nullptr) : nlohmann::json(o.e2e_max_steps)},
+        {"gateway_config", o.config},
+        {"clock", "lockstep"}}},
+      {"seeds", {{"training", o.seed}, {"gateway_first", o.gateway_seed}}},
+      {"block_hierarchy",
+       o.hierarchy.empty() ? bench::training_json(block_log) : nlohmann::json(o.hierarchy)},
+      {"e2e_training",
+       o.e2e_checkpoint.empty() ? bench::training_json(e2e_log) : nlohmann::json(o.e2e_checkpoint)},
+      {"fine_tuning", fine_tuning},
+      {"cells", cells},
+      {"table_markdown", table}};
+  write_text(out / "shape_transfer.json", doc.dump(2) + "\n");
+  write_text(out / "SHAPE_TRANSFER.md", table);
+  std::printf("%s", table.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "The paper's transfer step: retract fine-tuned per shape, played through the "
+      "robot gateway on the simulated Panda",
+      "pnp-shape-transfer"};
+  const training::Preset& preset = tools::preset_in_args(argc, argv);
+  Options o;
+  tools::add_preset_options(app, o.preset, o.show_preset);
+  app.add_option("--world", o.world, "world profile: paper or gym (docs/SIMULATION.md)")
+      ->capture_default_str();
+  app.add_option("--seed", o.seed, "training seed (every role)")->capture_default_str();
+  app.add_option("--episodes", o.episodes, "gateway episodes per cell")->capture_default_str();
+  app.add_option("--gateway-seed", o.gateway_seed,
+                 "first gateway episode's scene seed (held out: >= 880000)")
+      ->capture_default_str();
+  app.add_option("--shapes", o.shapes, "new shapes (block is the trained one)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--extra-adapt", o.extra_adapt,
+                 "an extra row: these roles fine-tuned too (with retract), e.g. manipulate,hlc")
+      ->delimiter(',');
+  app.add_option("--fine-tune-max-steps", o.fine_tune_max_steps, "cap per fine-tuned role")
+      ->capture_default_str();
+  app.add_option("--e2e-max-steps", o.e2e_max_steps,
+                 "end-to-end cap (316k: the paper's hierarchy total, as in Table I)")
+      ->capture_default_str();
+  app.add_flag("--skip-e2e", o.skip_e2e, "no end-to-end column");
+  app.add_option("--hierarchy", o.hierarchy,
+                 "block hierarchy checkpoints to use instead of training one (pnp-train --out)");
+  app.add_option("--e2e-checkpoint", o.e2e_checkpoint,
+                 "end-to-end checkpoint to use instead of training one");
+  app.add_option("--hidden", o.hidden,
+                 "hidden widths of the experts and end-to-end (default: the preset's); those of "
+                 "a --hierarchy checkpoint for fine-tuning it")
+      ->delimiter(',');
+  app.add_option("--config", o.config, "gateway config")->capture_default_str();
+  app.add_option("--threads", o.threads, "worker threads (0: all cores)");
+  app.add_option("--out", o.out,
+                 "where shape_transfer.json, SHAPE_TRANSFER.md and "
+                 "checkpoints/ go")
+      ->capture_default_str();
+  return tools::run_tool(app, argc, argv, [&] {
+    if (o.show_preset) {
+      std::printf("%s\n", training::to_json(preset).dump(2).c_str());
+      return;
+    }
+    run(o, preset);
+  });
+}

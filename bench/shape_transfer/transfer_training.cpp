@@ -1,0 +1,91 @@
+#include "bench/shape_transfer/transfer_training.h"
+
+#include <algorithm>
+
+#include "build_info.h"
+
+namespace pnp::bench {
+namespace {
+
+std::size_t role_index(const std::string& role) {
+  const auto* it = std::find(kHierarchyRoles.begin(), kHierarchyRoles.end(), role);
+  return static_cast<std::size_t>(it - kHierarchyRoles.begin());
+}
+
+// One role of the hierarchy trained for `object`, after (experts) or over (hlc) the
+// experts in `blobs`, from `init` (empty: fresh).
+training::Blob train_hierarchy_role(const TransferTraining& t, const std::string& role,
+                                    sim::ObjectShape object, const HierarchyBlobs& blobs,
+                                    training::Blob init, long long max_steps,
+                                    std::vector<RoleTraining>& log) {
+  training::TrainingSpec spec = training::preset_spec(*t.preset, role);
+  spec.robot = sim::Robot::kPanda;
+  spec.object = object;
+  spec.world = t.world;
+  spec.seed = t.seed;
+  if (max_steps > 0) spec.stop.max_steps = max_steps;
+  if (!t.hidden.empty()) spec.ddpg.hidden = t.hidden;
+  training::TrainingInputs inputs;
+  inputs.init = std::move(init);
+  const std::size_t before = role == "hlc" ? sim::kNumSubtasks : role_index(role);
+  // The paper's experts train after scripted subtasks; the choreographer always sequences
+  // the learned ones.
+  if (role == "hlc" || t.preset->chained_experts) {
+    for (std::size_t k = 0; k < before; ++k) inputs.experts[k] = blobs.roles[k];
+  }
+  training::TrainingHooks hooks;
+  hooks.threads = t.threads;
+  const std::string label = role + "/" + std::string(sim::object_name(object));
+  hooks.progress = [&](const rl::CurvePoint& p) {
+    if (t.progress) t.progress(label, p);
+  };
+  training::TrainingOutcome out = training::train_role(spec, inputs, hooks, kCodeCommit);
+  log.push_back({label, std::move(out.result)});
+  return std::move(out.checkpoint);
+}
+
+}  // namespace
+
+HierarchyBlobs train_block_hierarchy(const TransferTraining& t, std::vector<RoleTraining>& log) {
+  HierarchyBlobs blobs;
+  for (std::size_t k = 0; k < kHierarchyRoles.size(); ++k) {
+    blobs.roles[k] =
+        train_hierarchy_role(t, kHierarchyRoles[k], sim::ObjectShape::kBlock, blobs, {}, 0, log);
+  }
+  return blobs;
+}
+
+HierarchyBlobs fine_tune_for_shape(const TransferTraining& t, const HierarchyBlobs& base,
+                                   sim::ObjectShape shape, const std::vector<std::string>& adapted,
+                                   std::vector<RoleTraining>& log) {
+  HierarchyBlobs blobs = base;
+  for (std::size_t k = 0; k < kHierarchyRoles.size(); ++k) {
+    const std::string role = kHierarchyRoles[k];
+    if (std::find(adapted.begin(), adapted.end(), role) == adapted.end()) continue;
+    blobs.roles[k] =
+        train_hierarchy_role(t, role, shape, blobs, base.roles[k], t.fine_tune_max_steps, log);
+    blobs.objects[k] = shape;
+  }
+  return blobs;
+}
+
+training::Blob train_end_to_end(const TransferTraining& t, long long max_steps,
+                                std::vector<RoleTraining>& log) {
+  training::TrainingSpec spec = training::preset_spec(*t.preset, "e2e");
+  spec.robot = sim::Robot::kPanda;
+  spec.object = sim::ObjectShape::kBlock;
+  spec.world = t.world;
+  spec.seed = t.seed;
+  spec.stop.max_steps = max_steps;
+  if (!t.hidden.empty()) spec.ddpg.hidden = t.hidden;
+  training::TrainingHooks hooks;
+  hooks.threads = t.threads;
+  hooks.progress = [&](const rl::CurvePoint& p) {
+    if (t.progress) t.progress("e2e/block", p);
+  };
+  training::TrainingOutcome out = training::train_role(spec, {}, hooks, kCodeCommit);
+  log.push_back({"e2e/block", std::move(out.result)});
+  return std::move(out.checkpoint);
+}
+
+}  // namespace pnp::bench
