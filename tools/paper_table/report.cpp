@@ -44,6 +44,22 @@ std::vector<const MethodRun*> of_method(const std::vector<MethodRun>& runs,
   return out;
 }
 
+struct MethodTotals {
+  Stats steps, wall;
+};
+
+// Total steps and wall time of a method's runs, over seeds.
+MethodTotals method_totals(const std::vector<const MethodRun*>& runs) {
+  std::vector<double> totals, walls;
+  int reached = 0;
+  for (const MethodRun* r : runs) {
+    totals.push_back(static_cast<double>(r->total_steps));
+    walls.push_back(r->total_wall_s);
+    reached += r->reached ? 1 : 0;
+  }
+  return {stats(totals, reached), stats(walls, reached)};
+}
+
 Stats role_steps(const std::vector<const MethodRun*>& runs, const std::string& role) {
   std::vector<double> v;
   int reached = 0;
@@ -129,14 +145,7 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
   for (const std::string method : {"e2e", "bc_original", "bc", "ddpg_her"}) {
     const auto rs = of_method(runs, method);
     if (rs.empty()) continue;
-    std::vector<double> totals, walls;
-    int reached = 0;
-    for (const MethodRun* r : rs) {
-      totals.push_back(static_cast<double>(r->total_steps));
-      walls.push_back(r->total_wall_s);
-      reached += r->reached ? 1 : 0;
-    }
-    const Stats total = stats(totals, reached), wall = stats(walls, reached);
+    const auto [total, wall] = method_totals(rs);
     if (method == "e2e") {
       md += fmt::format("| {} | - | - | - | - | {} | {:.0f} s ± {:.0f} s |\n", method_label(method),
                         steps_cell(total), wall.mean, wall.sd);
@@ -188,13 +197,7 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
 namespace {
 
 std::string total_steps_cell(const std::vector<MethodRun>& runs, const std::string& method) {
-  std::vector<double> totals;
-  int reached = 0;
-  for (const MethodRun* r : of_method(runs, method)) {
-    totals.push_back(static_cast<double>(r->total_steps));
-    reached += r->reached ? 1 : 0;
-  }
-  return steps_cell(stats(totals, reached));
+  return steps_cell(method_totals(of_method(runs, method)).steps);
 }
 
 std::string held_out_cell(const std::vector<MethodRun>& runs) {
