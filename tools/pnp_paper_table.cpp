@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   app.add_option("--expert-max-steps", expert_max_steps)->capture_default_str();
   app.add_option("--hlc-max-steps", hlc_max_steps)->capture_default_str();
   app.add_flag("--skip-ddpg-her", plan.skip_ddpg_her,
-               "skip the DDPG+HER hierarchies (and their Panda row): the baselines only");
+               "skip the DDPG+HER hierarchies on fetch (the Panda row has --skip-panda)");
   app.add_flag("--skip-bc", plan.skip_bc);
   app.add_flag("--skip-bc-original", plan.skip_bc_original,
                "skip BC with the original code's networks and schedule (2 x 128 ELU, lr 1e-4, "

@@ -88,7 +88,7 @@ TableResult run_table(const TablePlan& plan, ReportContext context,
       write_all();
     }
   }
-  if (!plan.skip_panda && !plan.skip_ddpg_her) {
+  if (!plan.skip_panda) {
     ExperimentSettings panda = s;
     panda.robot = sim::Robot::kPanda;
     result.panda =

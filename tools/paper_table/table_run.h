@@ -21,7 +21,7 @@ struct TablePlan {
   int seeds = 5;                   // DDPG+HER hierarchies
   int baseline_seeds = 3;          // BC (both) and end-to-end
   std::uint64_t first_seed = 0;
-  bool skip_ddpg_her = false;  // baselines only (the DDPG+HER rows measured elsewhere)
+  bool skip_ddpg_her = false;  // no DDPG+HER rows on fetch (the Panda row: skip_panda)
   bool skip_bc = false, skip_bc_original = false, skip_e2e = false, skip_panda = false;
 };
 
