@@ -1,9 +1,9 @@
 // pnp-shape-transfer: the paper's transfer step, through the platform. A hierarchy is
 // trained on the Panda with the block; for each new shape only the retract expert is
-// fine-tuned from the block's (the paper's row), and optionally more roles (--extra-adapt,
-// an extra row); the end-to-end baseline is trained on the block. Every shape is then
-// played through the robot gateway on the simulated Panda controller (lockstep clock),
-// with the inference service serving each policy from a fresh store:
+// fine-tuned from the block's (the paper's row), and, as an extra row, more roles
+// (--extra-adapt: the choreographer by default, the best row measured); the end-to-end baseline is
+// trained on the block. Every shape is then played through the robot gateway on the simulated Panda
+// controller (lockstep clock), with the inference service serving each policy from a fresh store:
 //   (a) hierarchy with the shape's fine-tuned retract,  (a+) with the extra roles too,
 //   (b) the block hierarchy as it is,                   (c) end-to-end, trained on block.
 // Writes OUT/shape_transfer.json (every figure, seed and setting), OUT/SHAPE_TRANSFER.md
@@ -39,7 +39,7 @@ struct Options {
   bool show_preset = false, skip_e2e = false;
   std::uint64_t seed = 0, gateway_seed = 880000;
   int episodes = 200;
-  std::vector<std::string> shapes{"cylinder", "small_block"}, extra_adapt;
+  std::vector<std::string> shapes{"cylinder", "small_block"}, extra_adapt{"hlc"};
   long long fine_tune_max_steps = 60'000, e2e_max_steps = 316'000;
   std::string hierarchy, e2e_checkpoint, config = PNP_DEFAULT_GATEWAY_CONFIG;
   std::string out = "runs/shape-transfer";
@@ -82,17 +82,19 @@ void validate(const Options& o) {
       throw_invalid_argument("--shapes", "shapes other than block (block is the trained one)", s);
   }
   for (const auto& r : o.extra_adapt) {
+    if (r == "none" && o.extra_adapt.size() == 1) continue;
     if (std::find(bench::kHierarchyRoles.begin(), bench::kHierarchyRoles.end(), r) ==
         bench::kHierarchyRoles.end())
-      throw_invalid_argument("--extra-adapt", "approach, manipulate, retract or hlc", r);
+      throw_invalid_argument("--extra-adapt", "approach, manipulate, retract or hlc (or none)", r);
   }
   if (o.gateway_seed < 880000)
     throw_invalid_argument("--gateway-seed", "a held-out seed >= 880000 (never trained on)",
                            std::to_string(o.gateway_seed));
 }
 
-void run(const Options& o, const training::Preset& preset) {
+void run(Options o, const training::Preset& preset) {
   validate(o);
+  if (o.extra_adapt == std::vector<std::string>{"none"}) o.extra_adapt.clear();
   const fs::path out(o.out);
   const sim::WorldProfile world = sim::parse_world_profile(o.world, "--world");
   const robot::GatewayConfig config = robot::GatewayConfig::load(o.config);
@@ -221,8 +223,10 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--extra-adapt", o.extra_adapt,
-                 "an extra row: these roles fine-tuned too (with retract), e.g. manipulate,hlc")
-      ->delimiter(',');
+                 "an extra row: these roles fine-tuned too (with retract), e.g. manipulate,hlc; "
+                 "none: the paper's row only")
+      ->delimiter(',')
+      ->capture_default_str();
   app.add_option("--fine-tune-max-steps", o.fine_tune_max_steps, "cap per fine-tuned role")
       ->capture_default_str();
   app.add_option("--e2e-max-steps", o.e2e_max_steps,
