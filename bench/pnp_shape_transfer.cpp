@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -82,7 +83,6 @@ void validate(const Options& o) {
       throw_invalid_argument("--shapes", "shapes other than block (block is the trained one)", s);
   }
   for (const auto& r : o.extra_adapt) {
-    if (r == "none" && o.extra_adapt.size() == 1) continue;
     if (std::find(bench::kHierarchyRoles.begin(), bench::kHierarchyRoles.end(), r) ==
         bench::kHierarchyRoles.end())
       throw_invalid_argument("--extra-adapt", "approach, manipulate, retract or hlc (or none)", r);
@@ -93,8 +93,8 @@ void validate(const Options& o) {
 }
 
 void run(Options o, const training::Preset& preset) {
-  validate(o);
   if (o.extra_adapt == std::vector<std::string>{"none"}) o.extra_adapt.clear();
+  validate(o);
   const fs::path out(o.out);
   const sim::WorldProfile world = sim::parse_world_profile(o.world, "--world");
   const robot::GatewayConfig config = robot::GatewayConfig::load(o.config);
@@ -117,17 +117,14 @@ void run(Options o, const training::Preset& preset) {
   // Roles after retract only: the extra row starts from row (a)'s fine-tuned retract.
   const bool extends_row_a = extra.front() == "retract";
 
+  // Given checkpoints are read first, so a bad path fails before any training.
+  training::Blob e2e;
+  if (!o.skip_e2e && !o.e2e_checkpoint.empty()) e2e = nn::read_file(o.e2e_checkpoint);
   std::vector<bench::RoleTraining> block_log, e2e_log;
   const bench::HierarchyBlobs block = o.hierarchy.empty()
                                           ? bench::train_block_hierarchy(t, block_log)
                                           : load_hierarchy(o.hierarchy);
   save_hierarchy(out / "checkpoints" / "block", block);
-  training::Blob e2e;
-  if (!o.skip_e2e) {
-    e2e = o.e2e_checkpoint.empty() ? bench::train_end_to_end(t, o.e2e_max_steps, e2e_log)
-                                   : nn::read_file(o.e2e_checkpoint);
-    nn::write_file_atomically((out / "checkpoints" / "e2e.ckpt").string(), e2e);
-  }
 
   std::vector<bench::TransferColumn> columns{{"fine_tuned", "(a) hierarchy, retract fine-tuned"}};
   if (!o.extra_adapt.empty()) {
@@ -150,27 +147,38 @@ void run(Options o, const training::Preset& preset) {
     std::fprintf(stderr, "gateway %-12s %-17s %d/%d\n", shape.c_str(), key.c_str(),
                  cells[shape][key]["successes"].get<int>(), o.episodes);
   };
-  for (const auto& shape : shapes) {
+  // Training first (the fine-tunings, then the long end-to-end run), so that a run that
+  // fails in training (say, --hidden not matching --hierarchy) fails before the hour of
+  // end-to-end training; then every cell.
+  std::map<std::string, bench::HierarchyBlobs> tuned, tuned_extra;
+  for (const auto& shape : o.shapes) {
     const sim::ObjectShape object = sim::parse_object(shape);
-    play(shape, "block_hierarchy", {serving::PolicyKind::kHierarchy, block, {}});
-    if (!o.skip_e2e) play(shape, "e2e", {serving::PolicyKind::kEndToEnd, {}, e2e});
-    if (object == sim::ObjectShape::kBlock) continue;  // (a) = (b): trained on it
     std::vector<bench::RoleTraining> log;
-    const auto tuned = bench::fine_tune_for_shape(t, block, object, {"retract"}, log);
-    save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned"), tuned);
-    play(shape, "fine_tuned", {serving::PolicyKind::kHierarchy, tuned, {}});
+    tuned[shape] = bench::fine_tune_for_shape(t, block, object, {"retract"}, log);
+    save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned"), tuned[shape]);
     if (!o.extra_adapt.empty()) {
       std::vector<bench::RoleTraining> extra_log;
-      const auto tuned_extra =
-          extends_row_a ? bench::fine_tune_for_shape(t, tuned, object,
+      tuned_extra[shape] =
+          extends_row_a ? bench::fine_tune_for_shape(t, tuned[shape], object,
                                                      {extra.begin() + 1, extra.end()}, extra_log)
                         : bench::fine_tune_for_shape(t, block, object, extra, extra_log);
-      save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned_extra"), tuned_extra);
-      play(shape, "fine_tuned_extra", {serving::PolicyKind::kHierarchy, tuned_extra, {}});
+      save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned_extra"), tuned_extra[shape]);
       for (auto& r : extra_log) r.role = "(a+) " + r.role;
       log.insert(log.end(), extra_log.begin(), extra_log.end());
     }
     fine_tuning[shape] = bench::training_json(log);
+  }
+  if (!o.skip_e2e) {
+    if (o.e2e_checkpoint.empty()) e2e = bench::train_end_to_end(t, o.e2e_max_steps, e2e_log);
+    nn::write_file_atomically((out / "checkpoints" / "e2e.ckpt").string(), e2e);
+  }
+  for (const auto& shape : shapes) {
+    play(shape, "block_hierarchy", {serving::PolicyKind::kHierarchy, block, {}});
+    if (!o.skip_e2e) play(shape, "e2e", {serving::PolicyKind::kEndToEnd, {}, e2e});
+    if (shape == "block") continue;  // (a) = (b): trained on it
+    play(shape, "fine_tuned", {serving::PolicyKind::kHierarchy, tuned.at(shape), {}});
+    if (!o.extra_adapt.empty())
+      play(shape, "fine_tuned_extra", {serving::PolicyKind::kHierarchy, tuned_extra.at(shape), {}});
   }
 
   const std::string table = bench::transfer_markdown(shapes, columns, cells, fine_tuning);
