@@ -16,6 +16,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,7 @@ struct Options {
   std::string out = "runs/shape-transfer";
   std::size_t threads = 0;
   std::vector<int> hidden;
+  std::optional<double> gripper_commitment;  // the preset's unless given
 };
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -92,9 +94,10 @@ void validate(const Options& o) {
                            std::to_string(o.gateway_seed));
 }
 
-void run(Options o, const training::Preset& preset) {
+void run(Options o, training::Preset preset) {
   if (o.extra_adapt == std::vector<std::string>{"none"}) o.extra_adapt.clear();
   validate(o);
+  if (o.gripper_commitment) preset.ddpg.gripper_commitment = *o.gripper_commitment;
   const fs::path out(o.out);
   const sim::WorldProfile world = sim::parse_world_profile(o.world, "--world");
   const robot::GatewayConfig config = robot::GatewayConfig::load(o.config);
@@ -192,6 +195,7 @@ void run(Options o, const training::Preset& preset) {
         {"episodes_per_cell", o.episodes},
         {"fine_tune_max_steps", o.fine_tune_max_steps},
         {"extra_adapt", extra},
+        {"gripper_commitment", preset.ddpg.gripper_commitment},
         {"hidden",
          o.hidden.empty() ? nlohmann::json(preset.ddpg.hidden) : nlohmann::json(o.hidden)},
         {"e2e_max_steps", o.skip_e2e ? nlohmann::json(nullptr) : nlohmann::json(o.e2e_max_steps)},
@@ -249,6 +253,8 @@ int main(int argc, char** argv) {
                  "hidden widths of the experts and end-to-end (default: the preset's); those of "
                  "a --hierarchy checkpoint for fine-tuning it")
       ->delimiter(',');
+  app.add_option("--gripper-commitment", o.gripper_commitment,
+                 "weight of the prior pushing a learned gripper command to an end [preset]");
   app.add_option("--config", o.config, "gateway config")->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores)");
   app.add_option("--out", o.out,

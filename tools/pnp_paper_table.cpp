@@ -101,6 +101,9 @@ int main(int argc, char** argv) {
                  "DDPG+HER and BC gradient steps per stored transition (0: the original's 40 "
                  "per cycle)")
       ->capture_default_str();
+  app.add_option("--gripper-commitment", s.ddpg.gripper_commitment,
+                 "weight of the prior pushing a learned gripper command to an end [preset]")
+      ->capture_default_str();
   double expert_target = preset.expert_stop.target_success;
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")

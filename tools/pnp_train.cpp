@@ -66,6 +66,9 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   app.add_option("--noise-eps", d.noise_eps)->capture_default_str();
   app.add_option("--random-eps", d.random_eps)->capture_default_str();
   app.add_option("--action-l2", d.action_l2)->capture_default_str();
+  app.add_option("--gripper-commitment", d.gripper_commitment,
+                 "weight of the prior pushing a learned gripper command to an end")
+      ->capture_default_str();
   app.add_option("--episodes-per-cycle", d.episodes_per_cycle)->capture_default_str();
   app.add_option("--updates-per-cycle", d.updates_per_cycle)->capture_default_str();
   app.add_option("--updates-per-transition", d.updates_per_transition,

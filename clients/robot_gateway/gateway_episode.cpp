@@ -6,6 +6,7 @@
 #include "common/error.h"
 #include "robot/perceived_observation.h"
 #include "robot/target_planner.h"
+#include "services/common/convert.h"
 #include "services/common/robot_convert.h"
 #include "sim/subtask.h"
 
@@ -21,6 +22,25 @@ nlohmann::json to_json(const Eigen::Vector3d& v) {
 
 double micros(Clock::duration d) {
   return std::chrono::duration<double, std::micro>(d).count();
+}
+
+// The world the served policy was trained in: its actions are planned the way that world
+// reads them. FAILED_PRECONDITION while no whole policy is served.
+sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  policy::v1::GetServingStatusResponse status;
+  const grpc::Status rpc = policy.GetServingStatus(&context, {}, &status);
+  if (!rpc.ok()) {
+    throw Error(ErrorCode::kUnavailable, "the inference service's GetServingStatus failed (code " +
+                                             std::to_string(rpc.error_code()) +
+                                             "): " + rpc.error_message());
+  }
+  if (!status.ready() || status.roles().empty()) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "the inference service serves no whole policy yet: promote one first");
+  }
+  return services::from_proto(status.roles(0).world(), "served world");
 }
 
 }  // namespace
@@ -50,6 +70,8 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
                                         const std::atomic<bool>& interrupted) {
   EpisodeReport report;
   report.seed = options.seed;
+  const sim::WorldProfile world = served_world(policy_);  // before anything moves
+  const sim::WorldParameters& world_parameters = sim::world_parameters(world);
   const geometry::RigidTransform sim_from_base = config_.base_from_sim.inverse();
   const auto deadman = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(config_.deadman_timeout_s));
@@ -74,6 +96,7 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
   const bool lockstep = controller_.state().lockstep();
   if (!options.dry_run) controller_.open_stream();
   log_("episode_start", {{"seed", options.seed},
+                         {"world", sim::world_profile_name(world)},
                          {"goal_sim_m", to_json(goal_sim)},
                          {"lockstep", lockstep},
                          {"dry_run", options.dry_run}});
@@ -147,8 +170,10 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
       break;
     }
 
-    const robot::PlannedTarget planned =
-        robot::plan_target(config_, commanded_base, state.gripper_width_m(), prediction->action);
+    const robot::PlannedTarget planned = robot::plan_target(
+        config_, world_parameters,
+        {commanded_base, services::from_proto(state.measured()), state.gripper_width_m()},
+        prediction->action);
     if (planned.verdict.ok()) {
       services::to_proto(planned.base.pose, *target.mutable_pose());
       gripper_command_m = planned.base.gripper_width_m;

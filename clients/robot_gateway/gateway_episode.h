@@ -1,7 +1,8 @@
 #pragma once
 // One pick-and-place episode driven through the gateway, cycle by cycle at the policy
 // rate: read the controller's state, rebuild the policy's observation in the simulation
-// frame, ask the inference session for the next action, plan the target (frame change,
+// frame, ask the inference session for the next action, plan the target as the served
+// policy's training world reads an action (its world, from GetServingStatus; frame change,
 // rate limit, safety check: robot/target_planner.h), stream it, and take the controller's
 // feedback. A refused target is logged with its reason and the arm is held at its
 // commanded pose instead. The dead-man: when inference or the controller does not

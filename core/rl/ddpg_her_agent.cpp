@@ -39,7 +39,7 @@ struct DdpgHerAgent::Partition {
   nn::Matrix state, next_state, critic_in, next_critic_in, target, dq, dx, da, demo_state, demo_da;
   nn::MlpWorkspace actor_ws, critic_ws, target_actor_ws, target_critic_ws, demo_ws;
   nn::AlignedFloats actor_grads, critic_grads;
-  double critic_loss = 0, q_sum = 0, motion_sq = 0, bc_sq = 0;
+  double critic_loss = 0, q_sum = 0, motion_sq = 0, commitment = 0, bc_sq = 0;
 };
 
 void normalise_policy_input(const nn::Normalizer& obs_norm, const nn::Normalizer& goal_norm,
@@ -192,6 +192,13 @@ void DdpgHerAgent::gradients(const SampledBatch& batch, Eigen::Index total, Part
   const auto motion_size = static_cast<float>(3 * total);
   p.da = p.dx.bottomRightCorner(kAct, c);
   p.da.topRows(3) += motion * (2.0f * l2 / motion_size);
+  p.commitment = 0;
+  if (config_.learn_gripper && config_.gripper_commitment > 0) {
+    const auto grip = pi.row(3);
+    p.commitment = static_cast<double>(c) - static_cast<double>(grip.squaredNorm());
+    p.da.row(3) -=
+        grip * (2.0f * static_cast<float>(config_.gripper_commitment) / static_cast<float>(total));
+  }
   std::fill(p.actor_grads.begin(), p.actor_grads.end(), 0.0f);
   actor_.backward_into(p.actor_ws, p.da, p.actor_grads, nullptr);
 }
@@ -250,16 +257,18 @@ UpdateStats DdpgHerAgent::update(const SampledBatch& batch, const SampledBatch* 
   step_networks(true);
 
   UpdateStats stats;
-  double q = 0, motion = 0, bc = 0;
+  double q = 0, motion = 0, commitment = 0, bc = 0;
   for (const Partition& p : parts_) {
     stats.critic_loss += p.critic_loss;
     q += p.q_sum;
     motion += p.motion_sq;
+    commitment += p.commitment;
     bc += p.bc_sq;
   }
   stats.critic_loss /= static_cast<double>(n);
   stats.mean_q = q / static_cast<double>(n);
-  stats.actor_loss = -stats.mean_q + config_.action_l2 * motion / static_cast<double>(3 * n);
+  stats.actor_loss = -stats.mean_q + config_.action_l2 * motion / static_cast<double>(3 * n) +
+                     config_.gripper_commitment * commitment / static_cast<double>(n);
   if (with_demos) stats.bc_loss = bc / static_cast<double>(demo_n * kAct);
   return stats;
 }

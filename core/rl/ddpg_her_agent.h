@@ -4,7 +4,8 @@
 // Actor:  [normalised observation (25), normalised goal (3)] -> hidden (ReLU by default) -> 4,
 // tanh. Critic: [normalised observation, normalised goal, action (4)] -> hidden (same activation)
 // -> 1. Critic target r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0] (the
-// rewards are minus distances); actor loss -Q(s, pi(s)) + action_l2 * mean(pi(s)^2).
+// rewards are minus distances); actor loss -Q(s, pi(s)) + action_l2 * mean(motion^2)
+// + gripper_commitment * mean(1 - gripper^2) (ddpg_her_config.h).
 
 #include <span>
 

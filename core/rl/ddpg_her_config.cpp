@@ -46,6 +46,8 @@ void DdpgHerConfig::validate() const {
   require(random_eps >= 0 && random_eps <= 1, "random_eps", "a probability in [0, 1]", random_eps);
   require(action_l2 >= 0 && std::isfinite(action_l2), "action_l2", "a non-negative number",
           action_l2);
+  require(gripper_commitment >= 0 && std::isfinite(gripper_commitment), "gripper_commitment",
+          "a non-negative number", gripper_commitment);
   require(clip_obs > 0, "clip_obs", "a positive number", clip_obs);
   require(norm_clip > 0, "norm_clip", "a positive number", norm_clip);
   require(norm_std_floor > 0, "norm_std_floor", "a positive number", norm_std_floor);

@@ -22,7 +22,17 @@ struct DdpgHerConfig {
   double random_eps = 0.3;            // probability of a uniformly random action
   bool random_gripper = false;        // random actions include the gripper (see subtask_rollout.h)
   double action_l2 = 1.0;             // penalty on the actor's squared motion (xyz, not gripper)
-  double clip_obs = 200.0;            // observations clipped before normalising
+  // Weight of a prior on a learned gripper command g: gripper_commitment * mean(1 - g^2).
+  // The environment's finger servo saturates (gym: ctrl = q + a metres), so every g < 0
+  // squeezes alike and the critic is flat there: nothing held a retract's command away
+  // from 0, it drifted there in states training had not covered, crossed it and let go
+  // (every failure of a cylinder retract traced on the Panda). The prior pushes g to
+  // whichever end the critic prefers. Subtask training applies it to retract only
+  // (rl/subtask_trainer.h agent_config): approach and manipulate must find when to open
+  // and close, and with the prior an approach expert's closed fingers froze shut (measured:
+  // 0% approach success at 15k steps, gym world, Panda, seed 100).
+  double gripper_commitment = 0;
+  double clip_obs = 200.0;  // observations clipped before normalising
   double norm_clip = 5.0;
   double norm_std_floor = 0.01;
   int episodes_per_cycle = 2;  // rollouts between two rounds of updates

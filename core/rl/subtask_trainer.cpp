@@ -77,6 +77,14 @@ double expert_stop_score(const CurvePoint& point, sim::Subtask subtask, bool end
              : std::min(point.task_success, point.subtask_success);
 }
 
+DdpgHerConfig agent_config(const SubtaskTrainingConfig& config) {
+  DdpgHerConfig agent = config.ddpg;
+  const bool holds =
+      config.algorithm != ExpertAlgorithm::kEndToEnd && config.subtask == sim::Subtask::kRetract;
+  if (!holds) agent.gripper_commitment = 0;
+  return agent;
+}
+
 SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
                                            const SubtaskTrainingConfig& config,
                                            const ProgressCallback& progress) {
@@ -84,9 +92,9 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
   config.stop.validate();
   const auto start = Clock::now();
   Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
-  auto agent = std::make_unique<DdpgHerAgent>(config.ddpg, init_rng);
-  if (config.init) restore_agent(*agent, *config.init);
   const bool end_to_end = config.algorithm == ExpertAlgorithm::kEndToEnd;
+  auto agent = std::make_unique<DdpgHerAgent>(agent_config(config), init_rng);
+  if (config.init) restore_agent(*agent, *config.init);
   const sim::Objective objective =
       end_to_end ? sim::Objective::kTask : sim::objective_of(config.subtask);
   const double object_width = envs.object_width_m();

@@ -49,6 +49,10 @@ struct SubtaskTrainingConfig {
 
 // What the stop rule scores for an expert: approach and manipulate must also do their own
 // subtask (see subtask_trainer.cpp); retract and end-to-end are judged on the task.
+// The agent's configuration for this expert: the gripper prior (gripper_commitment) is
+// the retract expert's only, since retract alone must keep one end (closed) all along.
+DdpgHerConfig agent_config(const SubtaskTrainingConfig& config);
+
 double expert_stop_score(const CurvePoint& point, sim::Subtask subtask, bool end_to_end);
 
 struct SubtaskTrainingOutput {

@@ -1,17 +1,23 @@
 #pragma once
 // One gateway cycle's decision, without I/O: the policy's action, taken in the simulation
 // frame the policy was trained in, becomes the pose target streamed to the arm in its base
-// frame. The action moves the commanded grip point (the mocap target in training) by
-// action_scale_m per unit on each axis, kept inside the simulation's gripper box as the
-// environment keeps it; the gripper opens or closes by action[3] of its full range from
-// the measured opening, as the environment's finger servos do. The orientation is held:
-// the policy does not turn the gripper. The target is then rate limited (libfranka-style)
-// and checked against the safety limits; a refused target must not be sent.
+// frame. The action is read the way the policy's training world read it
+// (sim/world_profile.h), so the arm does what the policy learned an action does:
+//   position  `paper`: the commanded grip point (the accumulated mocap target) moves by
+//             action_scale_m per unit; `gym`: the measured grip point does (gym resets the
+//             mocap target to the gripper before each action). Both are kept inside the
+//             simulation's gripper box, as the paper world keeps its target.
+//   gripper   from the measured opening, by action[3] of the full range (`paper`), or by
+//             action[3] metres per finger (`gym`'s ctrl = q + a: effectively open or close).
+// The orientation is held: the policy does not turn the gripper. The target is then rate
+// limited (libfranka-style) and checked against the safety limits; a refused target must
+// not be sent.
 
 #include "geometry/pose.h"
 #include "robot/gateway_config.h"
 #include "robot/safety_limits.h"
 #include "sim/observation.h"
+#include "sim/world_profile.h"
 
 namespace pnp::robot {
 
@@ -22,10 +28,16 @@ struct PlannedTarget {
   bool rate_limited = false;  // the step was shortened to the speed limit
 };
 
-// `commanded_base`: the controller's current commanded pose; `measured_gap_m`: the
-// measured finger opening. INVALID_ARGUMENT for a non-finite commanded pose or gap (the
-// controller's own report, not the policy's output: a policy NaN becomes a refusal).
-PlannedTarget plan_target(const GatewayConfig& config, const geometry::Pose& commanded_base,
-                          double measured_gap_m, const sim::Action& action);
+// What the controller reports, in its base frame.
+struct ArmReading {
+  geometry::Pose commanded_base;  // the pose it is driving to
+  geometry::Pose measured_base;   // where the grip point is
+  double gap_m = 0;               // the measured finger opening
+};
+
+// INVALID_ARGUMENT for a non-finite reading (the controller's own report, not the
+// policy's output: a policy NaN becomes a refusal).
+PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameters& world,
+                          const ArmReading& arm, const sim::Action& action);
 
 }  // namespace pnp::robot

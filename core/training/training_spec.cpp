@@ -81,6 +81,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"random_eps", d.random_eps},
             {"random_gripper", d.random_gripper},
             {"action_l2", d.action_l2},
+            {"gripper_commitment", d.gripper_commitment},
             {"clip_obs", d.clip_obs},
             {"norm_clip", d.norm_clip},
             {"norm_std_floor", d.norm_std_floor},
@@ -163,6 +164,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*ddpg, "random_eps", d.random_eps, p);
     read(*ddpg, "random_gripper", d.random_gripper, p);
     read(*ddpg, "action_l2", d.action_l2, p);
+    read(*ddpg, "gripper_commitment", d.gripper_commitment, p);
     read(*ddpg, "clip_obs", d.clip_obs, p);
     read(*ddpg, "norm_clip", d.norm_clip, p);
     read(*ddpg, "norm_std_floor", d.norm_std_floor, p);

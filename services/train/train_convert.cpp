@@ -32,6 +32,7 @@ void read_ddpg(const train::v1::DdpgHerConfig& in, training::TrainingSpec& spec)
   if (in.has_noise_eps()) out.noise_eps = in.noise_eps();
   if (in.has_random_eps()) out.random_eps = in.random_eps();
   if (in.has_action_l2()) out.action_l2 = in.action_l2();
+  if (in.has_gripper_commitment()) out.gripper_commitment = in.gripper_commitment();
   if (in.has_updates_per_cycle()) out.updates_per_cycle = in.updates_per_cycle();
   if (in.has_updates_per_transition()) out.updates_per_transition = in.updates_per_transition();
   if (in.has_scripted_gripper()) spec.scripted_gripper = in.scripted_gripper();

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <thread>
+#include <tuple>
 
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
@@ -49,6 +50,12 @@ robot::GatewayConfig panda_config() {
 // A policy service whose sessions answer too late: the gateway's dead-man must trip.
 class StalledPolicyService final : public pv1::PolicyService::Service {
  public:
+  grpc::Status GetServingStatus(grpc::ServerContext*, const pv1::GetServingStatusRequest*,
+                                pv1::GetServingStatusResponse* response) override {
+    response->add_roles()->set_world(common::v1::WORLD_GYM);
+    response->set_ready(true);
+    return grpc::Status::OK;
+  }
   grpc::Status PredictSession(
       grpc::ServerContext* context,
       grpc::ServerReaderWriter<pv1::PredictSessionResponse, pv1::PredictSessionRequest>* stream)
@@ -239,6 +246,44 @@ TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
             1e-9);
   EXPECT_EQ(count("deadman"), 1);
   stalled_server.shutdown(std::chrono::milliseconds(100));
+}
+
+// A policy service that answers but serves nothing yet.
+class UnreadyPolicyService final : public pv1::PolicyService::Service {
+ public:
+  grpc::Status GetServingStatus(grpc::ServerContext*, const pv1::GetServingStatusRequest*,
+                                pv1::GetServingStatusResponse* response) override {
+    response->set_ready(false);
+    return grpc::Status::OK;
+  }
+};
+
+// Without a served policy there is no world to read actions in: the episode is refused
+// before the arm moves, whether the service serves nothing or cannot say.
+TEST_F(GatewayEndToEnd, NoServedPolicyIsRefusedBeforeTheArmMoves) {
+  UnreadyPolicyService unready;
+  pv1::PolicyService::Service unimplemented;  // GetServingStatus: UNIMPLEMENTED
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  for (auto [service, code, message] :
+       {std::tuple<pv1::PolicyService::Service*, ErrorCode, std::string>{
+            &unready, ErrorCode::kFailedPrecondition, "serves no whole policy yet"},
+        {&unimplemented, ErrorCode::kUnavailable, "GetServingStatus failed"}}) {
+    services::ServerRuntime server({"127.0.0.1:0", 1 << 20, {service}, {}});
+    auto stub = pv1::PolicyService::NewStub(
+        grpc::CreateChannel(loopback(server.port()), grpc::InsecureChannelCredentials()));
+    GatewayEpisodeRunner runner(config, *controller_, *stub, recorder());
+    const auto before = arm_->state();
+    try {
+      runner.run(episode(904), not_interrupted_);
+      ADD_FAILURE() << "ran without a served policy";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), code);
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(arm_->state().sequence, before.sequence);
+    server.shutdown(std::chrono::milliseconds(100));
+  }
 }
 
 TEST_F(GatewayEndToEnd, ABrokenReadingEndsTheEpisodeNotTheGateway) {

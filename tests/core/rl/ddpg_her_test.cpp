@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <set>
 
 #include "common/error.h"
@@ -62,6 +63,9 @@ TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   c = {};
   c.demo_batch_size = 0;
   EXPECT_EQ(refusal(c), "demo_batch_size: expected a positive integer, got 0.000000");
+  c = {};
+  c.gripper_commitment = -1;
+  EXPECT_EQ(refusal(c), "gripper_commitment: expected a non-negative number, got -1.000000");
 }
 
 TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
@@ -99,23 +103,30 @@ TEST(ExpertCheckpoint, RoundTripGivesIdenticalActionsAndCorruptionIsRefused) {
   }
 }
 
-// The update's batch halves run on two threads or one; the weights must be identical.
-TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
-  DdpgHerConfig config;  // 3 x 256, batch 256: the unpacked kernel on its paths
-  Rng rng_a(9), rng_b(9), data(10);
-  DdpgHerAgent one(config, rng_a, 1), two(config, rng_b, 2);
+// n transitions of uniform noise in [-1, 1], rewards made non-positive, none done.
+SampledBatch random_batch(std::uint64_t seed, std::size_t n) {
+  Rng data(seed);
   SampledBatch batch;
   auto fill = [&](std::vector<float>& v, std::size_t size) {
     v.resize(size);
     for (float& x : v) x = static_cast<float>(data.uniform(-1, 1));
   };
-  fill(batch.observation, 256 * 25);
-  fill(batch.next_observation, 256 * 25);
-  fill(batch.goal, 256 * 3);
-  fill(batch.action, 256 * 4);
-  fill(batch.reward, 256);
+  fill(batch.observation, n * 25);
+  fill(batch.next_observation, n * 25);
+  fill(batch.goal, n * 3);
+  fill(batch.action, n * 4);
+  fill(batch.reward, n);
   for (float& r : batch.reward) r = -std::abs(r);
-  batch.done.assign(256, 0.0f);
+  batch.done.assign(n, 0.0f);
+  return batch;
+}
+
+// The update's batch halves run on two threads or one; the weights must be identical.
+TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
+  DdpgHerConfig config;  // 3 x 256, batch 256: the unpacked kernel on its paths
+  Rng rng_a(9), rng_b(9);
+  DdpgHerAgent one(config, rng_a, 1), two(config, rng_b, 2);
+  const SampledBatch batch = random_batch(10, 256);
   for (int i = 0; i < 5; ++i) {
     const UpdateStats a = one.update(batch), b = two.update(batch);
     EXPECT_EQ(a.critic_loss, b.critic_loss);
@@ -124,6 +135,70 @@ TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
                          two.actor().params().begin()));
   EXPECT_TRUE(std::equal(one.critic().params().begin(), one.critic().params().end(),
                          two.critic().params().begin()));
+}
+
+double mean_abs_gripper(const DdpgHerAgent& agent, const SampledBatch& batch) {
+  ActorSnapshot actor = agent.snapshot();
+  double sum = 0;
+  for (int i = 0; i < 64; ++i) {
+    sim::Observation o;
+    for (int k = 0; k < 25; ++k) o(k) = batch.observation[static_cast<std::size_t>(i * 25 + k)];
+    const sim::Goal g(batch.goal[static_cast<std::size_t>(i * 3)],
+                      batch.goal[static_cast<std::size_t>(i * 3 + 1)],
+                      batch.goal[static_cast<std::size_t>(i * 3 + 2)]);
+    sum += std::abs(actor.act(o, g)(3));
+  }
+  return sum / 64;
+}
+
+// The prior adds gripper_commitment * mean(1 - g^2) to the actor's loss, and training
+// with it moves the learned gripper command away from 0; with a scripted gripper it
+// changes nothing.
+TEST(DdpgHer, GripperCommitmentPushesTheLearnedGripperCommandToAnEnd) {
+  DdpgHerConfig config;
+  config.hidden = {32, 32};
+  config.batch_size = 64;
+  config.action_l2 = 0;
+  const SampledBatch batch = random_batch(11, 64);
+  auto trained = [&](double weight, bool learn_gripper, std::vector<double>* losses) {
+    DdpgHerConfig c = config;
+    c.gripper_commitment = weight;
+    c.learn_gripper = learn_gripper;
+    Rng rng(21);
+    auto agent = std::make_unique<DdpgHerAgent>(c, rng, 1);
+    for (int i = 0; i < 200; ++i) {
+      const UpdateStats stats = agent->update(batch);
+      if (losses) losses->push_back(stats.actor_loss + stats.mean_q);
+    }
+    return agent;
+  };
+  std::vector<double> without, with;
+  const auto plain = trained(0, true, &without);
+  const auto committed = trained(2.0, true, &with);
+  // Before the first step both actors are the same network: the losses differ by the term.
+  EXPECT_DOUBLE_EQ(without.front(), 0.0);
+  EXPECT_GT(with.front(), 0.0);
+  EXPECT_LE(with.front(), 2.0);
+  EXPECT_LT(with.back(), 0.2 * with.front()) << "the commands went to the ends";
+  EXPECT_GT(mean_abs_gripper(*committed, batch), mean_abs_gripper(*plain, batch) + 0.2);
+  const auto scripted = trained(2.0, false, nullptr);
+  const auto scripted_plain = trained(0, false, nullptr);
+  EXPECT_TRUE(std::equal(scripted->actor().params().begin(), scripted->actor().params().end(),
+                         scripted_plain->actor().params().begin()));
+}
+
+TEST(SubtaskTraining, OnlyTheRetractExpertGetsTheGripperPrior) {
+  SubtaskTrainingConfig config;
+  config.ddpg.gripper_commitment = 1.5;
+  for (const sim::Subtask subtask :
+       {sim::Subtask::kApproach, sim::Subtask::kManipulate, sim::Subtask::kRetract}) {
+    config.subtask = subtask;
+    config.algorithm = ExpertAlgorithm::kDdpgHer;
+    EXPECT_EQ(agent_config(config).gripper_commitment,
+              subtask == sim::Subtask::kRetract ? 1.5 : 0.0);
+    config.algorithm = ExpertAlgorithm::kEndToEnd;
+    EXPECT_EQ(agent_config(config).gripper_commitment, 0.0);
+  }
 }
 
 TEST(DdpgHer, BehaviourCloningFitsTheDemonstratedActions) {
