@@ -194,10 +194,15 @@ void DdpgHerAgent::gradients(const SampledBatch& batch, Eigen::Index total, Part
   p.da.topRows(3) += motion * (2.0f * l2 / motion_size);
   p.commitment = 0;
   if (config_.learn_gripper && config_.gripper_commitment > 0) {
-    const auto grip = pi.row(3);
-    p.commitment = static_cast<double>(c) - static_cast<double>(grip.squaredNorm());
-    p.da.row(3) -=
-        grip * (2.0f * static_cast<float>(config_.gripper_commitment) / static_cast<float>(total));
+    // Closing commands only: pushing an opening one open could freeze the fingers open.
+    const float scale =
+        2.0f * static_cast<float>(config_.gripper_commitment) / static_cast<float>(total);
+    for (Eigen::Index i = 0; i < c; ++i) {
+      const float g = pi(3, i);
+      if (g >= 0) continue;
+      p.commitment += static_cast<double>(1.0f - g * g);
+      p.da(3, i) -= g * scale;
+    }
   }
   std::fill(p.actor_grads.begin(), p.actor_grads.end(), 0.0f);
   actor_.backward_into(p.actor_ws, p.da, p.actor_grads, nullptr);

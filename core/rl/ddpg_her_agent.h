@@ -5,7 +5,7 @@
 // tanh. Critic: [normalised observation, normalised goal, action (4)] -> hidden (same activation)
 // -> 1. Critic target r + gamma (1 - done) Q'(s', pi'(s')), clamped to [-1/(1-gamma), 0] (the
 // rewards are minus distances); actor loss -Q(s, pi(s)) + action_l2 * mean(motion^2)
-// + gripper_commitment * mean(1 - gripper^2) (ddpg_her_config.h).
+// + gripper_commitment * mean((1 - gripper^2) where gripper < 0) (ddpg_her_config.h).
 
 #include <span>
 

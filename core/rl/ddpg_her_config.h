@@ -22,12 +22,14 @@ struct DdpgHerConfig {
   double random_eps = 0.3;            // probability of a uniformly random action
   bool random_gripper = false;        // random actions include the gripper (see subtask_rollout.h)
   double action_l2 = 1.0;             // penalty on the actor's squared motion (xyz, not gripper)
-  // Weight of a prior on a learned gripper command g: gripper_commitment * mean(1 - g^2).
-  // The environment's finger servo saturates (gym: ctrl = q + a metres), so every g < 0
-  // squeezes alike and the critic is flat there: nothing held a retract's command away
+  // Weight of a prior on a learned gripper command g: gripper_commitment * mean over the
+  // batch of (1 - g^2) where g < 0 (a closing command is pushed to -1; an opening one is
+  // left to the critic). The environment's finger servo saturates (gym: ctrl = q + a metres), so
+  // every g < 0 squeezes alike and the critic is flat there: nothing held a retract's command away
   // from 0, it drifted there in states training had not covered, crossed it and let go
-  // (every failure of a cylinder retract traced on the Panda). The prior pushes g to
-  // whichever end the critic prefers. Subtask training applies it to retract only
+  // (every failure of a cylinder retract traced on the Panda). A two-sided prior (to
+  // whichever end g was on) froze a fresh retract's fingers open: 0.13 at 34k steps
+  // (Panda, gym world, seed 0). Subtask training applies it to retract only
   // (rl/subtask_trainer.h agent_config): approach and manipulate must find when to open
   // and close, and with the prior an approach expert's closed fingers froze shut (measured:
   // 0% approach success at 15k steps, gym world, Panda, seed 100).

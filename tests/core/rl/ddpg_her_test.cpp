@@ -151,7 +151,7 @@ double mean_abs_gripper(const DdpgHerAgent& agent, const SampledBatch& batch) {
   return sum / 64;
 }
 
-// The prior adds gripper_commitment * mean(1 - g^2) to the actor's loss, and training
+// The prior adds gripper_commitment * mean((1 - g^2) where g < 0) to the actor's loss, and training
 // with it moves the learned gripper command away from 0; with a scripted gripper it
 // changes nothing.
 TEST(DdpgHer, GripperCommitmentPushesTheLearnedGripperCommandToAnEnd) {
