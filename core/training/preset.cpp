@@ -42,8 +42,7 @@ Preset ours() {
   p.name = "ours";
   p.summary =
       "every improvement of ours without demonstrations: learned gripper, chained experts, 0.5 "
-      "updates per transition, experts stopped at 97%, predicate "
-      "inputs and masking for the "
+      "updates per transition, experts stopped at 97%, predicate inputs and masking for the "
       "choreographer, evaluation every 1k steps";
   p.uses_demonstrations = false;
   p.chained_experts = true;
@@ -100,9 +99,6 @@ TrainingSpec preset_spec(const Preset& preset, std::string_view role) {
   spec.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
   spec.preset = std::string(preset.name);
   spec.ddpg = preset.ddpg;
-  // The gripper prior is retract's only (rl/subtask_trainer.h agent_config); the spec
-  // says so rather than showing a weight that would not be used.
-  if (role != "retract") spec.ddpg.gripper_commitment = 0;
   spec.a3c = preset.a3c;
   spec.scripted_gripper = preset.scripted_gripper;
   spec.stop = role == "hlc"   ? preset.hlc_stop

@@ -187,6 +187,46 @@ TEST(DdpgHer, GripperCommitmentPushesTheLearnedGripperCommandToAnEnd) {
                          scripted_plain->actor().params().begin()));
 }
 
+// The prior counts closing commands only: on the first update its share of the actor's
+// loss is the weight times the mean of (1 - g^2) over the commands below 0, where g is
+// the untrained actor's command (an opening command must be left to the critic).
+TEST(DdpgHer, GripperCommitmentCountsClosingCommandsOnly) {
+  DdpgHerConfig config;
+  config.hidden = {32, 32};
+  config.batch_size = 64;
+  config.action_l2 = 0;
+  config.gripper_commitment = 2.0;
+  const SampledBatch batch = random_batch(12, 64);
+  // The first initialisation whose untrained commands take both signs on the batch.
+  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+    Rng probe_rng(seed);
+    const DdpgHerAgent probe(config, probe_rng, 1);
+    ActorSnapshot actor = probe.snapshot();
+    double expected = 0;
+    int closing = 0;
+    for (int i = 0; i < 64; ++i) {
+      sim::Observation o;
+      for (int k = 0; k < 25; ++k) o(k) = batch.observation[static_cast<std::size_t>(i * 25 + k)];
+      const sim::Goal goal(batch.goal[static_cast<std::size_t>(i * 3)],
+                           batch.goal[static_cast<std::size_t>(i * 3 + 1)],
+                           batch.goal[static_cast<std::size_t>(i * 3 + 2)]);
+      const double g = actor.act(o, goal)(3);
+      if (g < 0) {
+        expected += 1 - g * g;
+        ++closing;
+      }
+    }
+    if (closing == 0 || closing == 64) continue;
+    Rng rng(seed);
+    DdpgHerAgent agent(config, rng, 1);
+    const UpdateStats stats = agent.update(batch);
+    EXPECT_NEAR(stats.actor_loss + stats.mean_q, 2.0 * expected / 64, 1e-4)
+        << "seed " << seed << ", " << closing << " closing commands of 64";
+    return;
+  }
+  FAIL() << "no initialisation gave commands of both signs";
+}
+
 TEST(SubtaskTraining, OnlyTheRetractExpertGetsTheGripperPrior) {
   SubtaskTrainingConfig config;
   config.ddpg.gripper_commitment = 1.5;
