@@ -137,16 +137,21 @@ TEST(DdpgHer, UpdateIsIdenticalOnOneOrTwoThreads) {
                          two.critic().params().begin()));
 }
 
+// The actor's gripper command for the batch's i-th state.
+double gripper_command(ActorSnapshot& actor, const SampledBatch& batch, int i) {
+  sim::Observation o;
+  for (int k = 0; k < 25; ++k) o(k) = batch.observation[static_cast<std::size_t>(i * 25 + k)];
+  const sim::Goal g(batch.goal[static_cast<std::size_t>(i * 3)],
+                    batch.goal[static_cast<std::size_t>(i * 3 + 1)],
+                    batch.goal[static_cast<std::size_t>(i * 3 + 2)]);
+  return actor.act(o, g)(3);
+}
+
 double mean_abs_gripper(const DdpgHerAgent& agent, const SampledBatch& batch) {
   ActorSnapshot actor = agent.snapshot();
   double sum = 0;
   for (int i = 0; i < 64; ++i) {
-    sim::Observation o;
-    for (int k = 0; k < 25; ++k) o(k) = batch.observation[static_cast<std::size_t>(i * 25 + k)];
-    const sim::Goal g(batch.goal[static_cast<std::size_t>(i * 3)],
-                      batch.goal[static_cast<std::size_t>(i * 3 + 1)],
-                      batch.goal[static_cast<std::size_t>(i * 3 + 2)]);
-    sum += std::abs(actor.act(o, g)(3));
+    sum += std::abs(gripper_command(actor, batch, i));
   }
   return sum / 64;
 }
@@ -205,12 +210,7 @@ TEST(DdpgHer, GripperCommitmentCountsClosingCommandsOnly) {
     double expected = 0;
     int closing = 0;
     for (int i = 0; i < 64; ++i) {
-      sim::Observation o;
-      for (int k = 0; k < 25; ++k) o(k) = batch.observation[static_cast<std::size_t>(i * 25 + k)];
-      const sim::Goal goal(batch.goal[static_cast<std::size_t>(i * 3)],
-                           batch.goal[static_cast<std::size_t>(i * 3 + 1)],
-                           batch.goal[static_cast<std::size_t>(i * 3 + 2)]);
-      const double g = actor.act(o, goal)(3);
+      const double g = gripper_command(actor, batch, i);
       if (g < 0) {
         expected += 1 - g * g;
         ++closing;
