@@ -75,19 +75,21 @@ std::vector<gateway::EpisodeReport> drive(const robot::GatewayConfig& config,
       {"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
   std::vector<gateway::EpisodeReport> reports;
   {
+    const std::atomic<bool> never{false};
     gateway::ControllerLink controller(
         grpc::CreateChannel(loopback(server.port()), grpc::InsecureChannelCredentials()),
-        loopback(server.port()), std::chrono::milliseconds(2000));
-    controller.acquire_lease("pnp-bench-gateway", std::chrono::milliseconds(1000));
+        loopback(server.port()), std::chrono::milliseconds(2000), never);
+    controller.acquire_lease(
+        "pnp-bench-gateway",
+        std::chrono::milliseconds(static_cast<long long>(config.lease_timeout_s * 1000)));
     if (state_hot_us) *state_hot_us = get_state_p50_us(controller, 500);
     gateway::GatewayEpisodeRunner runner(config, controller, policy,
                                          [](std::string_view, const nlohmann::json&) {});
-    const std::atomic<bool> never{false};
     do {
       gateway::EpisodeOptions episode;
       episode.seed = first_seed + reports.size();
       reports.push_back(runner.run(episode, never));
-    } while (more(reports));
+    } while (!gateway::ends_run(reports.back().end) && more(reports));
   }
   server.shutdown(std::chrono::milliseconds(500));
   return reports;

@@ -66,22 +66,29 @@ std::uint64_t play_segment(const GatewayCellSpec& spec, policy::v1::PolicyServic
   services::ServerRuntime server(
       {"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
   {
+    const std::atomic<bool> never{false};
     gateway::ControllerLink controller(
         grpc::CreateChannel(loopback(server.port()), grpc::InsecureChannelCredentials()),
-        loopback(server.port()), std::chrono::milliseconds(2000));
-    controller.acquire_lease("pnp-shape-transfer", std::chrono::milliseconds(1000));
+        loopback(server.port()), std::chrono::milliseconds(2000), never);
+    controller.acquire_lease(
+        "pnp-shape-transfer",
+        std::chrono::milliseconds(static_cast<long long>((*spec.config).lease_timeout_s * 1000)));
     gateway::GatewayEpisodeRunner runner(*spec.config, controller, policy,
                                          [&](std::string_view event, const nlohmann::json& fields) {
                                            nlohmann::json line = fields;
                                            line["event"] = event;
                                            events << line.dump() << "\n";
                                          });
-    const std::atomic<bool> never{false};
     for (; next <= last; ++next) {
       try {
         gateway::EpisodeOptions episode;
         episode.seed = next;
         reports.push_back(runner.run(episode, never));
+        if (gateway::ends_run(reports.back().end)) {  // a fresh stand-in for the rest
+          gateway_errors.push_back({{"seed", next}, {"error", reports.back().reason}});
+          ++next;
+          break;
+        }
       } catch (const std::exception& e) {
         gateway::EpisodeReport failed;
         failed.seed = next;

@@ -25,6 +25,7 @@ training::Blob train_hierarchy_role(const TransferTraining& t, const std::string
   spec.seed = t.seed;
   if (max_steps > 0) spec.stop.max_steps = max_steps;
   if (!t.hidden.empty()) spec.ddpg.hidden = t.hidden;
+  if (!init.empty()) spec.ddpg.gripper_commitment = t.fine_tune_gripper_commitment;
   training::TrainingInputs inputs;
   inputs.init = std::move(init);
   const std::size_t before = role == "hlc" ? sim::kNumSubtasks : role_index(role);

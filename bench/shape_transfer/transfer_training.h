@@ -44,6 +44,9 @@ struct TransferTraining {
   long long fine_tune_max_steps = 60'000;  // per fine-tuned role
   std::size_t threads = 0;
   std::vector<int> hidden;  // the experts' and end-to-end's widths; empty: the preset's
+  // The retract gripper prior (DdpgHerConfig::gripper_commitment) while fine-tuning for a
+  // new shape only; the block hierarchy and end-to-end train with the preset's.
+  double fine_tune_gripper_commitment = 0;
   std::function<void(const std::string& label, const rl::CurvePoint&)> progress;
 };
 

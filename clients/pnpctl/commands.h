@@ -88,4 +88,12 @@ struct PipelineArgs {
 };
 int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args);
 
+// The arm's controller (--robot-controller): its state, an emergency stop, and clearing a
+// stop. An emergency stop is cleared only by repeating its reason (robot status shows it)
+// and naming the operator.
+int robot_status_command(const Endpoints& endpoints, bool json);
+int robot_stop_command(const Endpoints& endpoints, const std::string& reason);
+int robot_resume_command(const Endpoints& endpoints, const std::string& acknowledged_reason,
+                         const std::string& operator_name);
+
 }  // namespace pnp::pnpctl

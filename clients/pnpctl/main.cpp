@@ -223,6 +223,29 @@ int main(int argc, char** argv) {
     command = [&] { return pipeline_command(endpoints, pipeline); };
   });
 
+  auto* robot_cmd = app.add_subcommand("robot", "the arm's controller: status, stop, resume");
+  robot_cmd->require_subcommand(1);
+  bool robot_json = false;
+  auto* robot_status = robot_cmd->add_subcommand("status", "mode, lease, stop and grip point");
+  robot_status->add_flag("--json", robot_json, "one JSON object");
+  robot_status->callback(
+      [&] { command = [&] { return robot_status_command(endpoints, robot_json); }; });
+  std::string stop_reason;
+  auto* robot_stop = robot_cmd->add_subcommand("stop", "emergency-stop the arm (no lease needed)");
+  robot_stop->add_option("--reason", stop_reason, "why (what clearing it acknowledges)")
+      ->required();
+  robot_stop->callback(
+      [&] { command = [&] { return robot_stop_command(endpoints, stop_reason); }; });
+  std::string ack;
+  const char* user = std::getenv("USER");
+  std::string operator_name = user ? user : "";
+  auto* robot_resume = robot_cmd->add_subcommand(
+      "resume", "clear a stop: an emergency stop needs its reason repeated (robot status)");
+  robot_resume->add_option("--ack", ack, "the stop's reason, word for word")->required();
+  robot_resume->add_option("--operator", operator_name, "who clears it (logged) [$USER]");
+  robot_resume->callback(
+      [&] { command = [&] { return robot_resume_command(endpoints, ack, operator_name); }; });
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -16,9 +16,11 @@ struct ControllerLink::Stream {
 };
 
 ControllerLink::ControllerLink(std::shared_ptr<grpc::Channel> channel, std::string address,
-                               std::chrono::milliseconds rpc_timeout)
+                               std::chrono::milliseconds rpc_timeout,
+                               const std::atomic<bool>& interrupted)
     : address_(std::move(address)),
       rpc_timeout_(rpc_timeout),
+      interrupted_(interrupted),
       controller_(rv1::RobotControllerService::NewStub(channel)),
       scene_(rv1::SimulatedSceneService::NewStub(channel)) {}
 
@@ -30,11 +32,40 @@ ControllerLink::~ControllerLink() {
   }
 }
 
-std::unique_ptr<grpc::ClientContext> ControllerLink::context(
-    std::chrono::milliseconds timeout) const {
-  auto c = std::make_unique<grpc::ClientContext>();
-  c->set_deadline(std::chrono::system_clock::now() + timeout);
-  return c;
+// Asynchronous under the hood so that the wait can look at the interrupt: a synchronous
+// call would hold the gateway for its whole deadline.
+template <typename Response, typename Start>
+std::optional<Response> ControllerLink::call(const char* what, std::chrono::milliseconds timeout,
+                                             bool interruptible, Start start) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + timeout);
+  grpc::CompletionQueue queue;
+  Response response;
+  grpc::Status status;
+  auto reader = start(&context, &queue);
+  int tag = 0;
+  reader->Finish(&response, &status, &tag);
+  bool cancelled = false;
+  void* got = nullptr;
+  bool ok = false;
+  for (;;) {
+    const auto next = queue.AsyncNext(&got, &ok, std::chrono::system_clock::now() + kInterruptPoll);
+    if (next == grpc::CompletionQueue::GOT_EVENT || next == grpc::CompletionQueue::SHUTDOWN) break;
+    if (interruptible && !cancelled && interrupted_.load()) {
+      context.TryCancel();  // the call then completes at once, CANCELLED
+      cancelled = true;
+    }
+  }
+  queue.Shutdown();
+  while (queue.Next(&got, &ok)) {
+  }
+  if (cancelled) {
+    throw Error(ErrorCode::kCancelled,
+                std::string(what) + " (" + address_ + "): interrupted by the operator");
+  }
+  if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) return std::nullopt;
+  services::throw_if_error(status, what, address_);
+  return response;
 }
 
 void ControllerLink::acquire_lease(const std::string& client_name,
@@ -42,55 +73,83 @@ void ControllerLink::acquire_lease(const std::string& client_name,
   rv1::AcquireLeaseRequest request;
   request.set_client_name(client_name);
   services::to_proto(std::chrono::nanoseconds(timeout), *request.mutable_timeout());
-  rv1::AcquireLeaseResponse response;
-  services::throw_if_error(
-      controller_->AcquireLease(context(rpc_timeout_).get(), request, &response), "AcquireLease",
-      address_);
-  lease_id_ = response.lease_id();
+  const auto response = call<rv1::AcquireLeaseResponse>(
+      "AcquireLease", rpc_timeout_, true, [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+        return controller_->AsyncAcquireLease(c, request, q);
+      });
+  if (!response) throw Error(ErrorCode::kUnavailable, "AcquireLease (" + address_ + "): no answer");
+  lease_id_ = response->lease_id();
+  client_name_ = client_name;
 }
 
 void ControllerLink::release_lease() {
   if (lease_id_.empty()) return;
   rv1::ReleaseLeaseRequest request;
   request.set_lease_id(lease_id_);
-  rv1::ReleaseLeaseResponse response;
-  const auto status = controller_->ReleaseLease(context(rpc_timeout_).get(), request, &response);
   lease_id_.clear();
-  services::throw_if_error(status, "ReleaseLease", address_);
+  call<rv1::ReleaseLeaseResponse>("ReleaseLease", rpc_timeout_, false,
+                                  [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+                                    return controller_->AsyncReleaseLease(c, request, q);
+                                  });
+}
+
+std::optional<rv1::GetStateResponse> ControllerLink::state(std::chrono::milliseconds timeout) {
+  const rv1::GetStateRequest request;
+  return call<rv1::GetStateResponse>("GetState", timeout, true,
+                                     [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+                                       return controller_->AsyncGetState(c, request, q);
+                                     });
 }
 
 rv1::GetStateResponse ControllerLink::state() {
-  rv1::GetStateResponse response;
-  services::throw_if_error(controller_->GetState(context(rpc_timeout_).get(), {}, &response),
-                           "GetState", address_);
-  return response;
+  auto response = state(rpc_timeout_);
+  if (!response) {
+    throw Error(ErrorCode::kUnavailable, "GetState (" + address_ + "): no answer within " +
+                                             std::to_string(rpc_timeout_.count()) + " ms");
+  }
+  return std::move(*response);
 }
 
 rv1::ResetSceneResponse ControllerLink::reset_scene(std::uint64_t seed) {
   rv1::ResetSceneRequest request;
   request.set_lease_id(lease_id_);
   request.set_seed(seed);
-  rv1::ResetSceneResponse response;
-  services::throw_if_error(scene_->ResetScene(context(rpc_timeout_).get(), request, &response),
-                           "ResetScene", address_);
-  return response;
+  auto response = call<rv1::ResetSceneResponse>(
+      "ResetScene", rpc_timeout_, true, [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+        return scene_->AsyncResetScene(c, request, q);
+      });
+  if (!response) {
+    throw Error(ErrorCode::kUnavailable, "ResetScene (" + address_ + "): no answer within " +
+                                             std::to_string(rpc_timeout_.count()) + " ms");
+  }
+  return std::move(*response);
 }
 
-rv1::StopResponse ControllerLink::stop(const std::string& reason) {
+rv1::StopResponse ControllerLink::stop(const std::string& reason, rv1::StopKind kind,
+                                       std::chrono::milliseconds timeout) {
   rv1::StopRequest request;
   request.set_reason(reason);
-  rv1::StopResponse response;
-  services::throw_if_error(controller_->Stop(context(rpc_timeout_).get(), request, &response),
-                           "Stop", address_);
-  return response;
+  request.set_kind(kind);
+  auto response = call<rv1::StopResponse>("Stop", timeout, false,
+                                          [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+                                            return controller_->AsyncStop(c, request, q);
+                                          });
+  if (!response) {
+    throw Error(ErrorCode::kUnavailable, "Stop (" + address_ + "): no answer within " +
+                                             std::to_string(timeout.count()) + " ms");
+  }
+  return std::move(*response);
 }
 
-void ControllerLink::resume() {
+rv1::ResumeResponse ControllerLink::clear_protective_stop() {
   rv1::ResumeRequest request;
   request.set_lease_id(lease_id_);
-  rv1::ResumeResponse response;
-  services::throw_if_error(controller_->Resume(context(rpc_timeout_).get(), request, &response),
-                           "Resume", address_);
+  auto response = call<rv1::ResumeResponse>("Resume", rpc_timeout_, true,
+                                            [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
+                                              return controller_->AsyncResume(c, request, q);
+                                            });
+  if (!response) throw Error(ErrorCode::kUnavailable, "Resume (" + address_ + "): no answer");
+  return std::move(*response);
 }
 
 void ControllerLink::open_stream() {
@@ -115,7 +174,11 @@ bool ControllerLink::send(const rv1::PoseTarget& target) {
 
 std::optional<rv1::ControllerFeedback> ControllerLink::feedback(Clock::time_point deadline) {
   if (!stream_) throw_failed_precondition("feedback: the drive stream is not open");
-  auto reply = stream_->replies->next(deadline);
+  auto reply = stream_->replies->next(deadline, &interrupted_, kInterruptPoll);
+  if (!reply && interrupted_.load()) {
+    throw Error(ErrorCode::kCancelled,
+                "StreamPoseTargets (" + address_ + "): interrupted by the operator");
+  }
   if (!reply && stream_->replies->ended()) {
     // The controller ended the stream: its status says why (e.g. a lost lease).
     stream_->replies.reset();
@@ -130,7 +193,6 @@ std::optional<rv1::ControllerFeedback> ControllerLink::feedback(Clock::time_poin
 
 void ControllerLink::close_stream() {
   if (!stream_) return;
-  stream_->rw->WritesDone();
   stream_->context.TryCancel();  // do not wait for a stalled controller
   stream_->replies.reset();
   stream_->rw->Finish().ok();

@@ -1,10 +1,13 @@
 #pragma once
 // The gateway's side of pnp.robot.v1: the lease, the scene (simulated stand-in only), the
-// controller's state and the drive stream. Each call has a deadline; a failed call is a
-// pnp::Error naming the call and the address (services::throw_if_error).
+// controller's state and the drive stream. Every wait is bounded (a deadline per call)
+// and, except Stop, gives way to the operator's interrupt within kInterruptPoll: an
+// interrupted call throws Error(kCancelled). A failed call is a pnp::Error naming the
+// call and the address (services::throw_if_error).
 
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -18,9 +21,12 @@ namespace pnp::gateway {
 class ControllerLink {
  public:
   using Clock = std::chrono::steady_clock;
+  // How often a waiting call looks at the interrupt flag: well inside one policy period.
+  static constexpr std::chrono::milliseconds kInterruptPoll{5};
 
+  // `interrupted` (the operator's Ctrl-C) must outlive the link.
   ControllerLink(std::shared_ptr<grpc::Channel> channel, std::string address,
-                 std::chrono::milliseconds rpc_timeout);
+                 std::chrono::milliseconds rpc_timeout, const std::atomic<bool>& interrupted);
   ~ControllerLink();  // closes the stream and gives the lease back
   ControllerLink(const ControllerLink&) = delete;
   ControllerLink& operator=(const ControllerLink&) = delete;
@@ -28,11 +34,17 @@ class ControllerLink {
   void acquire_lease(const std::string& client_name, std::chrono::milliseconds timeout);
   void release_lease();
   bool has_lease() const { return !lease_id_.empty(); }
+  const std::string& client_name() const { return client_name_; }
 
-  robot::v1::GetStateResponse state();
+  // nullopt when the controller does not answer within `timeout` (a stall).
+  std::optional<robot::v1::GetStateResponse> state(std::chrono::milliseconds timeout);
+  robot::v1::GetStateResponse state();  // the call timeout: UNAVAILABLE when it passes
   robot::v1::ResetSceneResponse reset_scene(std::uint64_t seed);  // needs the lease
-  robot::v1::StopResponse stop(const std::string& reason);
-  void resume();
+  // Not interruptible: it is what an interrupt does.
+  robot::v1::StopResponse stop(const std::string& reason, robot::v1::StopKind kind,
+                               std::chrono::milliseconds timeout);
+  // Clears a protective stop with the lease.
+  robot::v1::ResumeResponse clear_protective_stop();
 
   // The drive stream: opened with the lease, then one feedback per target.
   void open_stream();
@@ -41,17 +53,22 @@ class ControllerLink {
   // ended the stream.
   std::optional<robot::v1::ControllerFeedback> feedback(Clock::time_point deadline);
   void close_stream();
+  bool stream_open() const { return stream_ != nullptr; }
 
   const std::string& address() const { return address_; }
 
  private:
-  std::unique_ptr<grpc::ClientContext> context(std::chrono::milliseconds timeout) const;
+  // One unary call, waited for with `timeout` and the interrupt: nullopt on a deadline.
+  template <typename Response, typename Start>
+  std::optional<Response> call(const char* what, std::chrono::milliseconds timeout,
+                               bool interruptible, Start start);
 
   std::string address_;
   std::chrono::milliseconds rpc_timeout_;
+  const std::atomic<bool>& interrupted_;
   std::unique_ptr<robot::v1::RobotControllerService::Stub> controller_;
   std::unique_ptr<robot::v1::SimulatedSceneService::Stub> scene_;
-  std::string lease_id_;
+  std::string lease_id_, client_name_;
 
   struct Stream;
   std::unique_ptr<Stream> stream_;

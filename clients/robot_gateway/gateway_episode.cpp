@@ -1,13 +1,17 @@
 #include "clients/robot_gateway/gateway_episode.h"
 
+#include <cmath>
 #include <thread>
 
 #include "clients/robot_gateway/policy_session.h"
 #include "common/error.h"
+#include "robot/controller_reading.h"
 #include "robot/perceived_observation.h"
 #include "robot/target_planner.h"
 #include "services/common/convert.h"
 #include "services/common/robot_convert.h"
+#include "services/common/time_convert.h"
+#include "sim/panda_hand.h"
 #include "sim/subtask.h"
 
 namespace pnp::gateway {
@@ -22,6 +26,10 @@ nlohmann::json to_json(const Eigen::Vector3d& v) {
 
 double micros(Clock::duration d) {
   return std::chrono::duration<double, std::micro>(d).count();
+}
+
+std::chrono::milliseconds millis(double seconds) {
+  return std::chrono::milliseconds(static_cast<long long>(std::ceil(seconds * 1000)));
 }
 
 // The world the served policy was trained in: its actions are planned the way that world
@@ -43,6 +51,20 @@ sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy) {
   return services::from_proto(status.roles(0).world(), "served world");
 }
 
+robot::ControllerReading reading_of(const rv1::ControllerFeedback& state) {
+  robot::ControllerReading r;
+  r.frame_id = state.frame_id();
+  r.measured_base = services::from_proto(state.measured());
+  r.commanded_base = services::from_proto(state.commanded());
+  r.gripper_width_m = state.gripper_width_m();
+  if (state.has_object()) r.object_base = services::from_proto(state.object().pose());
+  return r;
+}
+
+std::string stop_description(const rv1::GetStateResponse& response) {
+  return rv1::StopKind_Name(response.stop_kind()) + ": " + response.stop_reason();
+}
+
 }  // namespace
 
 std::string_view episode_end_name(EpisodeEnd end) {
@@ -57,186 +79,372 @@ std::string_view episode_end_name(EpisodeEnd end) {
       return "interrupted";
     case EpisodeEnd::kControllerFault:
       return "controller_fault";
+    case EpisodeEnd::kStopped:
+      return "stopped";
+    case EpisodeEnd::kLeaseLost:
+      return "lease_lost";
   }
   return "unknown";
 }
+
+bool ends_run(EpisodeEnd end) {
+  return end == EpisodeEnd::kInterrupted || end == EpisodeEnd::kStopped ||
+         end == EpisodeEnd::kLeaseLost;
+}
+
+// Everything one episode keeps between its cycles.
+struct GatewayEpisodeRunner::Episode {
+  Episode(const EpisodeOptions& o, const std::atomic<bool>& i, policy::v1::PolicyService::Stub& p,
+          sim::WorldProfile w)
+      : options(o),
+        interrupted(i),
+        session(p),
+        world(w),
+        world_parameters(sim::world_parameters(w)) {}
+
+  const EpisodeOptions& options;
+  const std::atomic<bool>& interrupted;
+  PolicySession session;
+  bool session_broken = false;
+  const sim::WorldProfile world;
+  const sim::WorldParameters& world_parameters;
+  robot::PerceivedObservation perceived;
+  Eigen::Vector3d goal_sim = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond held_orientation_base = Eigen::Quaterniond::Identity();
+  std::optional<robot::PoseTarget> last_accepted;  // what hold() may send again
+  bool lockstep = false;
+  Clock::time_point next_cycle;
+  EpisodeReport report;
+
+  void end(EpisodeEnd end, std::string reason) {
+    report.end = end;
+    report.reason = std::move(reason);
+  }
+};
 
 GatewayEpisodeRunner::GatewayEpisodeRunner(const robot::GatewayConfig& config,
                                            ControllerLink& controller,
                                            policy::v1::PolicyService::Stub& policy, EventLog log)
     : config_(config), controller_(controller), policy_(policy), log_(std::move(log)) {}
 
+// Targets name the policy's grip point; a controller tracking another point (a real
+// Franka Hand left at its default 0.1034 m) would put every grasp 1 cm off.
+void GatewayEpisodeRunner::check_controller_tcp() {
+  if (tcp_checked_) return;
+  const double tcp = controller_.state().tcp_from_flange_m();
+  if (!(std::abs(tcp - sim::kGripPointFromFlange_m) <= sim::kTcpTolerance_m)) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "the controller (" + controller_.address() + ") tracks a grip point " +
+                    std::to_string(tcp) + " m from the flange; the policy's is " +
+                    std::to_string(sim::kGripPointFromFlange_m) +
+                    " m (set the controller's end-effector frame to it)");
+  }
+  tcp_checked_ = true;
+}
+
 EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
                                         const std::atomic<bool>& interrupted) {
-  EpisodeReport report;
-  report.seed = options.seed;
   const sim::WorldProfile world = served_world(policy_);  // before anything moves
-  const sim::WorldParameters& world_parameters = sim::world_parameters(world);
-  const geometry::RigidTransform sim_from_base = config_.base_from_sim.inverse();
-  const auto deadman = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config_.deadman_timeout_s));
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config_.policy_period_s));
-
-  Eigen::Vector3d goal_base;
-  double gripper_command_m = 0;  // held on refusals: keeps a grasp closed
-  if (options.reset_scene) {
-    const rv1::ResetSceneResponse scene = controller_.reset_scene(options.seed);
-    goal_base = services::from_proto(scene.goal());
-    gripper_command_m = scene.state().gripper_width_m();
-  } else {
-    if (!options.goal_base || !options.goal_base->allFinite()) {
-      throw_invalid_argument(
-          "goal", "a finite goal position (base frame) when the scene is not reset", "none");
+  check_controller_tcp();
+  Episode episode(options, interrupted, policy_, world);
+  episode.report.seed = options.seed;
+  try {
+    run_cycles(episode);
+  } catch (const Error& e) {
+    if (e.code() == ErrorCode::kCancelled || interrupted.load()) {
+      episode.end(EpisodeEnd::kInterrupted, std::string("interrupted: ") + e.what());
+    } else {
+      episode.end(EpisodeEnd::kControllerFault, e.what());
     }
-    goal_base = *options.goal_base;
-    gripper_command_m = controller_.state().state().gripper_width_m();
+    log_("fault", {{"step", episode.report.steps}, {"reason", episode.report.reason}});
   }
-  const Eigen::Vector3d goal_sim = sim_from_base.apply(goal_base);
-  const bool lockstep = controller_.state().lockstep();
-  if (!options.dry_run) controller_.open_stream();
-  log_("episode_start", {{"seed", options.seed},
-                         {"world", sim::world_profile_name(world)},
-                         {"goal_sim_m", to_json(goal_sim)},
-                         {"lockstep", lockstep},
-                         {"dry_run", options.dry_run}});
-
-  PolicySession session(policy_);
-  robot::PerceivedObservation perceived;
-  bool session_broken = false;
-  auto next_cycle = Clock::now();
-
-  auto end_with = [&](EpisodeEnd end, std::string reason) {
-    report.end = end;
-    report.reason = std::move(reason);
-  };
-
-  for (;;) {
-    if (interrupted.load()) {
-      controller_.stop("gateway interrupted (Ctrl-C)");
-      end_with(EpisodeEnd::kInterrupted, "interrupted: the arm was stopped");
-      break;
-    }
-    const auto start = Clock::now();
-    const rv1::ControllerFeedback state = controller_.state().state();
-    report.state_us.push_back(micros(Clock::now() - start));
-    if (state.mode() == rv1::CONTROLLER_MODE_FAULT) {
-      end_with(EpisodeEnd::kControllerFault, "the controller reports a fault");
-      break;
-    }
-    const geometry::Pose measured_sim = sim_from_base.apply(services::from_proto(state.measured()));
-    const geometry::Pose object_sim =
-        sim_from_base.apply(services::from_proto(state.object().pose()));
-    if (sim::is_task_success(object_sim.position_m, goal_sim)) {
-      report.success = true;
-      end_with(EpisodeEnd::kSuccess, "");
-      break;
-    }
-    if (report.steps >= config_.max_episode_steps) break;  // kStepCap
-
-    sim::Observation observation;
+  if (interrupted.load() && episode.report.end != EpisodeEnd::kInterrupted) {
+    episode.end(EpisodeEnd::kInterrupted, "interrupted by the operator");
+  }
+  leave_arm_safe(episode);
+  if (!episode.session_broken) {
     try {
-      observation = perceived.update({measured_sim.position_m, state.gripper_width_m(),
-                                      object_sim.position_m, object_sim.orientation});
-    } catch (const Error& e) {
-      // A reading the policy cannot be given: nothing is sent (the arm holds its last
-      // target) and the episode ends with the reason; the next episode goes on.
-      end_with(EpisodeEnd::kControllerFault, std::string("bad controller reading: ") + e.what());
-      log_("bad_reading", {{"step", report.steps}, {"reason", report.reason}});
-      break;
-    }
-    const auto asked = Clock::now();
-    std::optional<Prediction> prediction;
-    if (session.ask(observation, goal_sim)) prediction = session.answer(asked + deadman);
-    report.inference_us.push_back(micros(Clock::now() - asked));
-    const geometry::Pose commanded_base = services::from_proto(state.commanded());
-
-    rv1::PoseTarget target;
-    target.set_sequence(++sequence_);
-    target.set_frame_id(config_.base_frame_id);
-    services::to_proto(std::chrono::system_clock::now(), *target.mutable_stamp());
-    if (!prediction) {
-      session_broken = true;
-      const std::string why = "inference did not answer within " +
-                              std::to_string(config_.deadman_timeout_s * 1000) + " ms: holding";
-      log_("deadman", {{"step", report.steps}, {"reason", why}});
-      if (!options.dry_run) {
-        services::to_proto(commanded_base, *target.mutable_pose());
-        target.set_gripper_width_m(gripper_command_m);
-        controller_.send(target);
-        controller_.feedback(Clock::now() + deadman);
-      }
-      end_with(EpisodeEnd::kDeadman, why);
-      break;
-    }
-
-    const robot::PlannedTarget planned = robot::plan_target(
-        config_, world_parameters,
-        {commanded_base, services::from_proto(state.measured()), state.gripper_width_m()},
-        prediction->action);
-    if (planned.verdict.ok()) {
-      services::to_proto(planned.base.pose, *target.mutable_pose());
-      gripper_command_m = planned.base.gripper_width_m;
-      if (planned.rate_limited) ++report.rate_limited;
-    } else {
-      ++report.refused;
-      log_("refused", {{"step", report.steps},
-                       {"check", robot::safety_refusal_name(*planned.verdict.refusal)},
-                       {"reason", planned.verdict.reason},
-                       {"action",
-                        {prediction->action(0), prediction->action(1), prediction->action(2),
-                         prediction->action(3)}}});
-      services::to_proto(commanded_base, *target.mutable_pose());  // hold
-    }
-    target.set_gripper_width_m(gripper_command_m);
-
-    if (options.dry_run) {
-      log_("target", {{"step", report.steps},
-                      {"position_base_m", to_json(services::from_proto(target.pose()).position_m)},
-                      {"gripper_width_m", target.gripper_width_m()}});
-      report.cycle_us.push_back(micros(Clock::now() - start));
-    } else {
-      const bool sent = controller_.send(target);
-      report.cycle_us.push_back(micros(Clock::now() - start));
-      const auto feedback = sent ? controller_.feedback(Clock::now() + deadman) : std::nullopt;
-      if (!feedback) {
-        end_with(EpisodeEnd::kDeadman, "the controller did not answer within " +
-                                           std::to_string(config_.deadman_timeout_s * 1000) +
-                                           " ms (its own dead-man holds the arm)");
-        log_("deadman", {{"step", report.steps}, {"reason", report.reason}});
-        break;
-      }
-      if (feedback->status() != rv1::CONTROLLER_STATUS_OK) {
-        ++report.controller_refused;
-        log_("controller_refused",
-             {{"step", report.steps},
-              {"status", rv1::ControllerStatus_Name(feedback->status())},
-              {"errors",
-               std::vector<std::string>(feedback->errors().begin(), feedback->errors().end())}});
-      }
-    }
-    ++report.steps;
-    if (!lockstep) {
-      next_cycle += period;
-      const auto now = Clock::now();
-      if (now > next_cycle) {
-        ++report.missed_periods;
-        next_cycle = now;
-      } else {
-        std::this_thread::sleep_until(next_cycle);
-      }
+      episode.session.finish();
+    } catch (const std::exception&) {  // the session is abandoned with the episode
     }
   }
-  if (!session_broken) session.finish();
-  if (!options.dry_run) controller_.close_stream();
+  const EpisodeReport& report = episode.report;
   log_("episode_end", {{"seed", options.seed},
                        {"success", report.success},
                        {"end", episode_end_name(report.end)},
+                       {"reason", report.reason},
+                       {"arm_left", report.arm_left},
                        {"steps", report.steps},
                        {"refused", report.refused},
                        {"controller_refused", report.controller_refused},
                        {"missed_periods", report.missed_periods}});
-  return report;
+  return std::move(episode.report);
+}
+
+// How the arm is left: still tracking its last accepted target after a normal end; a
+// protective stop after a fault (the gateway no longer knows the arm's state); an
+// emergency stop on Ctrl-C. A stop that cannot be delivered is reported, not hidden.
+void GatewayEpisodeRunner::leave_arm_safe(Episode& episode) {
+  EpisodeReport& report = episode.report;
+  controller_.close_stream();
+  if (episode.options.dry_run) {
+    report.arm_left = "untouched (dry run)";
+    return;
+  }
+  const bool fault =
+      report.end == EpisodeEnd::kDeadman || report.end == EpisodeEnd::kControllerFault;
+  if (report.end != EpisodeEnd::kInterrupted && !fault) {
+    report.arm_left = report.end == EpisodeEnd::kStopped ? "emergency_stop" : "tracking";
+    return;
+  }
+  const auto kind = fault ? rv1::STOP_KIND_PROTECTIVE : rv1::STOP_KIND_EMERGENCY;
+  const std::string reason =
+      fault ? "gateway fault: " + report.reason : std::string("gateway interrupted (Ctrl-C)");
+  try {
+    controller_.stop(reason, kind, millis(config_.deadman_timeout_s));
+    report.arm_left = fault ? "protective_stop" : "emergency_stop";
+  } catch (const Error& e) {
+    report.arm_left = std::string("stop not delivered: ") + e.what();
+  }
+  log_("stop",
+       {{"kind", rv1::StopKind_Name(kind)}, {"reason", reason}, {"arm_left", report.arm_left}});
+}
+
+// The episode's start: an emergency stop or another lease holder ends the run before
+// anything moves; the gateway's own protective stop of the previous episode is cleared.
+bool GatewayEpisodeRunner::start_episode(Episode& episode) {
+  const rv1::GetStateResponse before = controller_.state();
+  if (before.lease_holder() != controller_.client_name()) {
+    episode.end(EpisodeEnd::kLeaseLost, "the lease is held by \"" + before.lease_holder() +
+                                            "\", not \"" + controller_.client_name() + "\"");
+    return false;
+  }
+  if (before.stop_kind() == rv1::STOP_KIND_EMERGENCY) {
+    episode.end(EpisodeEnd::kStopped, "the arm is emergency-stopped (" + before.stop_reason() +
+                                          "): an operator must clear it (pnpctl robot resume "
+                                          "--ack REASON)");
+    return false;
+  }
+  if (before.stop_kind() == rv1::STOP_KIND_PROTECTIVE && !episode.options.dry_run) {
+    controller_.clear_protective_stop();
+    log_("protective_stop_cleared", {{"reason", before.stop_reason()}});
+  }
+  rv1::ControllerFeedback start;
+  if (episode.options.reset_scene) {
+    const rv1::ResetSceneResponse scene = controller_.reset_scene(episode.options.seed);
+    episode.goal_sim = config_.base_from_sim.inverse().apply(services::from_proto(scene.goal()));
+    start = scene.state();
+  } else {
+    if (!episode.options.goal_base || !episode.options.goal_base->allFinite()) {
+      throw_invalid_argument(
+          "goal", "a finite goal position (base frame) when the scene is not reset", "none");
+    }
+    episode.goal_sim = config_.base_from_sim.inverse().apply(*episode.options.goal_base);
+    start = before.state();
+  }
+  if (auto bad = robot::reading_error(reading_of(start), config_.base_frame_id,
+                                      config_.limits.quaternion_norm_tolerance)) {
+    episode.end(EpisodeEnd::kControllerFault, "bad controller reading at the start: " + *bad);
+    return false;
+  }
+  episode.held_orientation_base = services::from_proto(start.commanded()).orientation;
+  episode.lockstep = before.lockstep();
+  if (!episode.options.dry_run) controller_.open_stream();
+  log_("episode_start", {{"seed", episode.options.seed},
+                         {"world", sim::world_profile_name(episode.world)},
+                         {"goal_sim_m", to_json(episode.goal_sim)},
+                         {"lockstep", episode.lockstep},
+                         {"dry_run", episode.options.dry_run}});
+  return true;
+}
+
+void GatewayEpisodeRunner::run_cycles(Episode& episode) {
+  if (!start_episode(episode)) return;
+  episode.next_cycle = Clock::now();
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.policy_period_s));
+  while (cycle(episode)) {
+    ++episode.report.steps;
+    if (episode.lockstep) continue;
+    episode.next_cycle += period;
+    const auto now = Clock::now();
+    if (now > episode.next_cycle) {
+      ++episode.report.missed_periods;
+      episode.next_cycle = now;
+    } else {
+      std::this_thread::sleep_until(episode.next_cycle);
+    }
+  }
+}
+
+// One cycle; false when the episode ends (its end and reason set).
+bool GatewayEpisodeRunner::cycle(Episode& episode) {
+  EpisodeReport& report = episode.report;
+  if (episode.interrupted.load()) {
+    episode.end(EpisodeEnd::kInterrupted, "interrupted by the operator");
+    return false;
+  }
+  const auto deadman = millis(config_.deadman_timeout_s);
+  const auto start = Clock::now();
+  const auto response = controller_.state(deadman);
+  report.state_us.push_back(micros(Clock::now() - start));
+  if (!response) {
+    episode.end(EpisodeEnd::kDeadman, "the controller did not answer GetState within " +
+                                          std::to_string(deadman.count()) + " ms");
+    return false;
+  }
+  const rv1::ControllerFeedback& state = response->state();
+  if (response->lease_holder() != controller_.client_name()) {
+    episode.end(EpisodeEnd::kLeaseLost,
+                "the lease is now held by \"" + response->lease_holder() + "\"");
+    return false;
+  }
+  if (state.mode() == rv1::CONTROLLER_MODE_FAULT) {
+    episode.end(EpisodeEnd::kControllerFault, "the controller reports a fault");
+    return false;
+  }
+  if (state.mode() == rv1::CONTROLLER_MODE_STOPPED) {
+    episode.end(EpisodeEnd::kStopped, "the arm was stopped (" + stop_description(*response) + ")");
+    return false;
+  }
+  const robot::ControllerReading reading = reading_of(state);
+  if (auto bad = robot::reading_error(reading, config_.base_frame_id,
+                                      config_.limits.quaternion_norm_tolerance)) {
+    episode.end(EpisodeEnd::kControllerFault, "bad controller reading: " + *bad);
+    log_("bad_reading", {{"step", report.steps}, {"reason", report.reason}});
+    return false;
+  }
+  const geometry::RigidTransform sim_from_base = config_.base_from_sim.inverse();
+  const geometry::Pose measured_sim = sim_from_base.apply(reading.measured_base);
+  const geometry::Pose object_sim = sim_from_base.apply(*reading.object_base);
+  if (sim::is_task_success(object_sim.position_m, episode.goal_sim)) {
+    report.success = true;
+    episode.end(EpisodeEnd::kSuccess, "");
+    return false;
+  }
+  if (report.steps >= config_.max_episode_steps) {
+    episode.end(EpisodeEnd::kStepCap, "");
+    return false;
+  }
+  sim::Observation observation;
+  try {
+    observation = episode.perceived.update({measured_sim.position_m, reading.gripper_width_m,
+                                            object_sim.position_m, object_sim.orientation});
+  } catch (const Error& e) {
+    // A reading the policy cannot be given: nothing is sent (the arm holds its last
+    // target) and the episode ends with the reason; the next episode goes on.
+    episode.end(EpisodeEnd::kControllerFault, std::string("bad controller reading: ") + e.what());
+    log_("bad_reading", {{"step", report.steps}, {"reason", report.reason}});
+    return false;
+  }
+
+  const auto asked = Clock::now();
+  std::optional<Prediction> prediction;
+  if (episode.session.ask(observation, episode.goal_sim)) {
+    prediction = episode.session.answer(asked + deadman, episode.interrupted);
+  }
+  report.inference_us.push_back(micros(Clock::now() - asked));
+  if (!prediction) {
+    episode.session_broken = true;  // a late answer would pair with the wrong request
+    if (episode.interrupted.load()) {
+      episode.end(EpisodeEnd::kInterrupted, "interrupted by the operator");
+    } else {
+      episode.end(EpisodeEnd::kDeadman,
+                  "inference did not answer within " + std::to_string(deadman.count()) +
+                      " ms: nothing more is sent, the arm holds its last accepted target");
+      log_("deadman", {{"step", report.steps}, {"reason", report.reason}});
+    }
+    return false;
+  }
+
+  const robot::PlannedTarget planned =
+      robot::plan_target(config_, episode.world_parameters,
+                         {reading.commanded_base, reading.measured_base, reading.gripper_width_m,
+                          episode.held_orientation_base},
+                         prediction->action);
+  if (!planned.verdict.ok()) {
+    ++report.refused;
+    log_("refused", {{"step", report.steps},
+                     {"check", robot::safety_refusal_name(*planned.verdict.refusal)},
+                     {"reason", planned.verdict.reason},
+                     {"action",
+                      {prediction->action(0), prediction->action(1), prediction->action(2),
+                       prediction->action(3)}}});
+    hold(episode, state);
+    report.cycle_us.push_back(micros(Clock::now() - start));
+    return true;
+  }
+  if (planned.rate_limited) ++report.rate_limited;
+  if (planned.clamped) ++report.clamped;
+  if (episode.options.dry_run) {
+    log_("target", {{"step", report.steps},
+                    {"position_base_m", to_json(planned.base.pose.position_m)},
+                    {"gripper_width_m", planned.base.gripper_width_m}});
+    report.cycle_us.push_back(micros(Clock::now() - start));
+    return true;
+  }
+  const bool go_on = send_and_take_feedback(episode, planned.base);
+  report.cycle_us.push_back(micros(Clock::now() - start));
+  return go_on;
+}
+
+// After a refusal: the last accepted target again, if it still passes the checks from
+// where the arm is commanded now; otherwise nothing (the controller holds by itself).
+void GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback& state) {
+  const geometry::Pose commanded = services::from_proto(state.commanded());
+  const bool can_resend = episode.last_accepted && !episode.options.dry_run &&
+                          robot::check_target(config_.limits, *episode.last_accepted, commanded,
+                                              config_.policy_period_s)
+                              .ok();
+  if (!can_resend) {
+    ++episode.report.held_without_target;
+    return;
+  }
+  const robot::PoseTarget again = *episode.last_accepted;
+  send_and_take_feedback(episode, again);
+}
+
+// False when the episode must end (no answer, a stop, a lost lease).
+bool GatewayEpisodeRunner::send_and_take_feedback(Episode& episode,
+                                                  const robot::PoseTarget& planned) {
+  EpisodeReport& report = episode.report;
+  rv1::PoseTarget target;
+  target.set_sequence(++sequence_);
+  target.set_frame_id(config_.base_frame_id);
+  services::to_proto(std::chrono::system_clock::now(), *target.mutable_stamp());
+  services::to_proto(planned.pose, *target.mutable_pose());
+  target.set_gripper_width_m(planned.gripper_width_m);
+  const auto deadman = millis(config_.deadman_timeout_s);
+  const bool sent = controller_.send(target);
+  const auto feedback = sent ? controller_.feedback(Clock::now() + deadman) : std::nullopt;
+  if (!feedback) {
+    episode.end(EpisodeEnd::kDeadman, sent ? "the controller did not answer a target within " +
+                                                 std::to_string(deadman.count()) + " ms"
+                                           : std::string("the drive stream broke"));
+    log_("deadman", {{"step", report.steps}, {"reason", report.reason}});
+    return false;
+  }
+  switch (feedback->status()) {
+    case rv1::CONTROLLER_STATUS_OK:
+      episode.last_accepted = planned;
+      return true;
+    case rv1::CONTROLLER_STATUS_STOPPED:
+      episode.end(EpisodeEnd::kStopped, "the controller refused a target: the arm is stopped");
+      return false;
+    case rv1::CONTROLLER_STATUS_LEASE_LOST:
+      episode.end(EpisodeEnd::kLeaseLost, "the controller refused a target: lease lost");
+      return false;
+    default:
+      break;
+  }
+  ++report.controller_refused;
+  ++report.controller_refusals_by_reason[rv1::ControllerStatus_Name(feedback->status())];
+  log_(
+      "controller_refused",
+      {{"step", report.steps},
+       {"status", rv1::ControllerStatus_Name(feedback->status())},
+       {"errors", std::vector<std::string>(feedback->errors().begin(), feedback->errors().end())}});
+  return true;
 }
 
 }  // namespace pnp::gateway

@@ -1,18 +1,24 @@
 #pragma once
 // One pick-and-place episode driven through the gateway, cycle by cycle at the policy
-// rate: read the controller's state, rebuild the policy's observation in the simulation
-// frame, ask the inference session for the next action, plan the target as the served
-// policy's training world reads an action (its world, from GetServingStatus; frame change,
-// rate limit, safety check: robot/target_planner.h), stream it, and take the controller's
-// feedback. A refused target is logged with its reason and the arm is held at its
-// commanded pose instead. The dead-man: when inference or the controller does not
-// answer within the timeout, the arm is held (a hold target, if the stream still takes
-// one) and the episode ends with the reason. It also ends on task success (judged from
-// the object's perceived pose), at the step cap, or when interrupted (after an E-stop).
+// rate: read the controller's state (within the dead-man time) and check it as a whole,
+// rebuild the policy's observation in the simulation frame, ask the inference session for
+// the next action, plan the target as the served policy's training world reads an action
+// (its world, from GetServingStatus; frame change, rate limit, safety check:
+// robot/target_planner.h), stream it, and take the controller's feedback.
+//
+// Hold means hold: a target the gateway refuses is replaced by the last target the
+// controller accepted, checked again, or by nothing; never by an older pose read back.
+// Every wait is bounded by the dead-man time and gives way to Ctrl-C. Any fault in a cycle
+// (a stalled or lost controller, a bad reading, a late answer from inference) ends that
+// episode with the reason and a protective stop (which the next episode clears as the
+// lease holder), and the run goes on. An emergency stop (Ctrl-C here, or anyone's) or a
+// lost lease ends the run: clearing an emergency stop is an operator's action
+// (pnpctl robot resume --ack REASON).
 
 #include <Eigen/Core>
 #include <atomic>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -21,6 +27,7 @@
 #include "clients/robot_gateway/controller_link.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "robot/gateway_config.h"
+#include "robot/safety_limits.h"
 
 namespace pnp::gateway {
 
@@ -33,18 +40,32 @@ struct EpisodeOptions {
   bool dry_run = false;                      // compute and log targets, send nothing
 };
 
-enum class EpisodeEnd { kSuccess, kStepCap, kDeadman, kInterrupted, kControllerFault };
+enum class EpisodeEnd {
+  kSuccess,
+  kStepCap,
+  kDeadman,          // the controller or inference did not answer in time
+  kInterrupted,      // Ctrl-C: the arm was emergency-stopped
+  kControllerFault,  // a fault, a bad reading or a failed call
+  kStopped,          // the arm is emergency-stopped (by anyone): an operator must clear it
+  kLeaseLost,        // another client holds the arm, or the lease lapsed
+};
 std::string_view episode_end_name(EpisodeEnd end);
+// Whether no further episode may start after this one (the run ends).
+bool ends_run(EpisodeEnd end);
 
 struct EpisodeReport {
   std::uint64_t seed = 0;
   bool success = false;
   EpisodeEnd end = EpisodeEnd::kStepCap;
-  std::string reason;  // for kDeadman and kControllerFault (a fault or a bad reading)
+  std::string reason;    // for every end but success and the step cap
+  std::string arm_left;  // "tracking", "protective_stop", "emergency_stop" or why not
   int steps = 0;
-  int refused = 0;                             // by the gateway's safety check (held instead)
-  int rate_limited = 0;                        // shortened to the speed limit
-  int controller_refused = 0;                  // feedback with a status other than OK
+  int refused = 0;              // by the gateway's safety check (held instead)
+  int held_without_target = 0;  // refusals with no checked target to hold: nothing sent
+  int rate_limited = 0;         // shortened to the speed limit
+  int clamped = 0;              // brought into the gateway's workspace box
+  int controller_refused = 0;   // feedback with a status other than OK
+  std::map<std::string, int> controller_refusals_by_reason;  // by ControllerStatus name
   int missed_periods = 0;                      // cycles that overran the policy period (paced only)
   std::vector<double> cycle_us;                // state -> inference -> transform -> send, per cycle
   std::vector<double> state_us, inference_us;  // the cycle's first two phases
@@ -55,16 +76,29 @@ class GatewayEpisodeRunner {
   GatewayEpisodeRunner(const robot::GatewayConfig& config, ControllerLink& controller,
                        policy::v1::PolicyService::Stub& policy, EventLog log);
 
-  // Paces cycles to the policy period unless the controller runs in lockstep.
+  // Paces cycles to the policy period unless the controller runs in lockstep. Throws
+  // (before anything moves) only when the run cannot drive this arm with this policy: no
+  // served policy (FAILED_PRECONDITION, or UNAVAILABLE when inference cannot say), or a
+  // controller whose grip point differs from the policy's (FAILED_PRECONDITION). Every
+  // other fault ends the episode with its reason.
   EpisodeReport run(const EpisodeOptions& options, const std::atomic<bool>& interrupted);
 
  private:
-  struct Cycle;
+  struct Episode;
+  void check_controller_tcp();
+  void run_cycles(Episode& episode);
+  bool start_episode(Episode& episode);
+  bool cycle(Episode& episode);
+  void hold(Episode& episode, const robot::v1::ControllerFeedback& state);
+  bool send_and_take_feedback(Episode& episode, const robot::PoseTarget& target);
+  void leave_arm_safe(Episode& episode);
+
   const robot::GatewayConfig& config_;
   ControllerLink& controller_;
   policy::v1::PolicyService::Stub& policy_;
   EventLog log_;
   std::uint64_t sequence_ = 0;  // per stream, strictly increasing
+  bool tcp_checked_ = false;
 };
 
 }  // namespace pnp::gateway

@@ -11,7 +11,8 @@ namespace pnp::gateway {
 nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
   std::vector<double> cycles, state, inference;
   int successes = 0, missed = 0, refused = 0, controller_refused = 0, rate_limited = 0;
-  std::map<std::string, int> ends;
+  int clamped = 0, held_without_target = 0;
+  std::map<std::string, int> ends, arm_left, controller_refusals_by_reason;
   nlohmann::json seeds = nlohmann::json::array();
   for (const EpisodeReport& e : episodes) {
     cycles.insert(cycles.end(), e.cycle_us.begin(), e.cycle_us.end());
@@ -22,7 +23,13 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
     refused += e.refused;
     controller_refused += e.controller_refused;
     rate_limited += e.rate_limited;
+    clamped += e.clamped;
+    held_without_target += e.held_without_target;
+    for (const auto& [reason, n] : e.controller_refusals_by_reason) {
+      controller_refusals_by_reason[reason] += n;
+    }
     ++ends[std::string(episode_end_name(e.end))];
+    ++arm_left[e.arm_left.rfind("stop not delivered", 0) == 0 ? "stop_not_delivered" : e.arm_left];
     seeds.push_back(e.seed);
   }
   const auto n = static_cast<double>(std::max<std::size_t>(1, episodes.size()));
@@ -38,8 +45,12 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
           {"missed_periods", missed},
           {"refused_targets", refused},
           {"rate_limited_targets", rate_limited},
+          {"clamped_targets", clamped},
+          {"held_without_target", held_without_target},
           {"controller_refusals", controller_refused},
+          {"controller_refusals_by_reason", controller_refusals_by_reason},
           {"ends", ends},
+          {"arm_left", arm_left},
           {"seeds", seeds}};
 }
 

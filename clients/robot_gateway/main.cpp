@@ -3,15 +3,18 @@
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
 //   --episodes 5 --seed 1000 [--dry-run] [--json]
-// Ctrl-C stops the arm (E-stop) and ends the episode.
+// Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
+// clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once.
 
 #include <grpcpp/grpcpp.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <thread>
 
@@ -56,11 +59,17 @@ int main(int argc, char** argv) {
     services::validate_address(controller_address, "--controller");
     services::validate_address(inference_address, "--inference");
     const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
-    // Ctrl-C or SIGTERM: the running episode stops the arm and ends.
+    // Ctrl-C or SIGTERM: the running episode stops the arm and ends; a second one exits
+    // at once (the arm's own dead-man, the lease, then holds it).
     std::atomic<bool> interrupted{false}, finished{false};
     std::jthread watcher([&] {
       services::wait_for_termination_signal();
-      if (!finished.load()) interrupted.store(true);
+      if (finished.load()) return;
+      interrupted.store(true);
+      services::wait_for_termination_signal();
+      if (finished.load()) return;
+      std::fputs("pnp-robot-gateway: second interrupt: exiting now\n", stderr);
+      std::_Exit(130);
     });
     struct WakeWatcher {  // on every way out: release the watcher so it can be joined
       std::atomic<bool>& finished;
@@ -80,9 +89,11 @@ int main(int argc, char** argv) {
         throw Error(ErrorCode::kUnavailable, address + ": not reachable within 2 s");
       }
     }
-    gateway::ControllerLink controller(controller_channel, controller_address, timeout);
+    gateway::ControllerLink controller(controller_channel, controller_address, timeout,
+                                       interrupted);
     auto policy = policy::v1::PolicyService::NewStub(inference_channel);
-    controller.acquire_lease(name, std::chrono::milliseconds(1000));
+    controller.acquire_lease(name, std::chrono::milliseconds(static_cast<long long>(
+                                       std::lround(config.lease_timeout_s * 1000))));
     gateway::EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
       if (!quiet) services::log_event("gateway", event, fields);
     };
@@ -94,19 +105,24 @@ int main(int argc, char** argv) {
                                     .goal_base = std::nullopt,
                                     .dry_run = dry_run},
                                    interrupted));
+      if (gateway::ends_run(reports.back().end)) {
+        std::fprintf(stderr, "pnp-robot-gateway: run ended: %s\n", reports.back().reason.c_str());
+        break;
+      }
     }
     const nlohmann::json summary = gateway::summarize(reports);
     if (json) {
       std::cout << summary.dump() << "\n";
     } else {
       std::printf(
-          "%d/%d episodes succeeded; cycle p50 %.0f us, p99 %.0f us; %d missed periods; "
-          "%d targets refused\n",
-          summary["successes"].get<int>(), episodes, summary["cycle_p50_us"].get<double>(),
-          summary["cycle_p99_us"].get<double>(), summary["missed_periods"].get<int>(),
-          summary["refused_targets"].get<int>());
+          "%d/%zu episodes succeeded (%d requested); cycle p50 %.0f us, p99 %.0f us; %d missed "
+          "periods; %d targets refused\n",
+          summary["successes"].get<int>(), reports.size(), episodes,
+          summary["cycle_p50_us"].get<double>(), summary["cycle_p99_us"].get<double>(),
+          summary["missed_periods"].get<int>(), summary["refused_targets"].get<int>());
     }
-    return interrupted.load() ? 130 : 0;
+    if (interrupted.load()) return 130;
+    return !reports.empty() && gateway::ends_run(reports.back().end) ? 3 : 0;
   } catch (const Error& e) {
     std::fprintf(stderr, "pnp-robot-gateway: %s\n", e.what());
     return e.code() == ErrorCode::kInvalidArgument ? 2 : 1;  // 2: bad usage or input

@@ -23,8 +23,9 @@ bool PolicySession::ask(const sim::Observation& observation, const sim::Goal& go
   return stream_->Write(request_);
 }
 
-std::optional<Prediction> PolicySession::answer(std::chrono::steady_clock::time_point deadline) {
-  const auto response = answers_->next(deadline);
+std::optional<Prediction> PolicySession::answer(std::chrono::steady_clock::time_point deadline,
+                                                const std::atomic<bool>& interrupted) {
+  const auto response = answers_->next(deadline, &interrupted);
   if (!response) return std::nullopt;
   const auto& a = response->prediction().action();
   Prediction p;

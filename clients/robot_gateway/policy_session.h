@@ -6,6 +6,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <memory>
 #include <optional>
 
@@ -30,7 +31,9 @@ class PolicySession {
 
   // false when the stream has broken (the server went away).
   bool ask(const sim::Observation& observation, const sim::Goal& goal);
-  std::optional<Prediction> answer(std::chrono::steady_clock::time_point deadline);
+  // nullopt when the deadline passes or `interrupted` is set first.
+  std::optional<Prediction> answer(std::chrono::steady_clock::time_point deadline,
+                                   const std::atomic<bool>& interrupted);
   // Why the stream ended, once it has (the server's status).
   grpc::Status finish();
 

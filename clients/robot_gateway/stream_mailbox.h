@@ -4,6 +4,8 @@
 // a reader thread moves every message into this mailbox and the loop waits on it with a
 // deadline. gRPC allows one reader and one writer at a time: the loop keeps writing.
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -37,10 +39,16 @@ class StreamMailbox {
   StreamMailbox(const StreamMailbox&) = delete;
   StreamMailbox& operator=(const StreamMailbox&) = delete;
 
-  // The next message, or nullopt when the deadline passes or the stream has ended.
-  std::optional<Message> next(Clock::time_point deadline) {
+  // The next message, or nullopt when the deadline passes, the stream has ended or
+  // `interrupted` (looked at every `poll`) is set.
+  std::optional<Message> next(Clock::time_point deadline,
+                              const std::atomic<bool>* interrupted = nullptr,
+                              std::chrono::milliseconds poll = std::chrono::milliseconds(5)) {
     std::unique_lock lock(mutex_);
-    arrived_.wait_until(lock, deadline, [&] { return !queue_.empty() || ended_; });
+    const auto ready = [&] { return !queue_.empty() || ended_; };
+    while (!ready() && Clock::now() < deadline && !(interrupted && interrupted->load())) {
+      arrived_.wait_until(lock, std::min(deadline, Clock::now() + poll), ready);
+    }
     if (queue_.empty()) return std::nullopt;
     Message message = std::move(queue_.front());
     queue_.pop_front();

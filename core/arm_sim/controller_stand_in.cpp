@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "sim/panda_hand.h"
 
 namespace pnp::arm_sim {
 namespace {
@@ -32,6 +33,18 @@ LeaseBook::Clock::duration seconds(double s) {
 
 }  // namespace
 
+std::string_view stop_kind_name(StopKind kind) {
+  switch (kind) {
+    case StopKind::kNone:
+      return "none";
+    case StopKind::kProtective:
+      return "protective";
+    case StopKind::kEmergency:
+      return "emergency";
+  }
+  return "unknown";
+}
+
 ControllerStandIn::CallerLock::CallerLock(const ControllerStandIn& arm) : arm_(arm) {
   arm_.callers_waiting_.fetch_add(1, std::memory_order_acq_rel);
   arm_.mutex_.lock();
@@ -44,6 +57,7 @@ ControllerStandIn::CallerLock::~CallerLock() {
 
 ControllerStandIn::ControllerStandIn(const StandInOptions& options)
     : options_(options), arm_(sim::Robot::kPanda, options.object, options.world, options.arm) {
+  options_.limits.validate();
   if (options_.base_frame_id.empty()) {
     throw_invalid_argument("base_frame_id", "a frame name", "\"\"");
   }
@@ -122,13 +136,19 @@ void ControllerStandIn::require_lease(const std::string& lease_id,
   }
 }
 
-void ControllerStandIn::open_stream(const std::string& lease_id) {
+std::uint64_t ControllerStandIn::open_stream(const std::string& lease_id) {
   const CallerLock lock(*this);
   const auto now = LeaseBook::Clock::now();
   require_lease(lease_id, now);
   leases_.renew(lease_id, now);
   last_sequence_ = 0;
+  ++current_stream_;
   publish_locked();
+  return current_stream_;
+}
+
+double ControllerStandIn::tcp_from_flange_m() const {
+  return sim::kGripPointFromFlange_m;
 }
 
 std::optional<std::string> ControllerStandIn::target_error(const TargetRequest& target) const {
@@ -146,20 +166,57 @@ std::optional<std::string> ControllerStandIn::target_error(const TargetRequest& 
   return std::nullopt;
 }
 
+std::optional<std::string> ControllerStandIn::stale_error(const TargetRequest& target) const {
+  const double limit = options_.limits.max_target_age_s;
+  if (!target.stamp) return "stamp: missing (a target must say when it was computed)";
+  // In lockstep the physics waits for each target: none answers a state that has moved on.
+  if (options_.clock == ClockMode::kLockstep) return std::nullopt;
+  const double age_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now() - *target.stamp).count();
+  if (age_s > limit) {
+    return "stamp: the target is " + std::to_string(age_s) + " s old, more than the controller's " +
+           "max_target_age_s " + std::to_string(limit) + " s";
+  }
+  if (age_s < -limit) {
+    return "stamp: " + std::to_string(-age_s) + " s in the future (clocks out of step by more " +
+           "than max_target_age_s " + std::to_string(limit) + " s)";
+  }
+  return std::nullopt;
+}
+
 ControllerReport ControllerStandIn::take_target(const std::string& lease_id,
+                                                std::uint64_t stream_id,
                                                 const TargetRequest& target) {
   const CallerLock lock(*this);
   ControllerStatus status = ControllerStatus::kOk;
   std::vector<std::string> errors;
-  if (!leases_.renew(lease_id, LeaseBook::Clock::now())) {
-    status = ControllerStatus::kLeaseLost;
-    errors.emplace_back("lease_id: the lease expired or was taken over; the arm holds");
+  const auto refuse = [&](ControllerStatus s, std::string why) {
+    status = s;
+    errors.push_back(std::move(why));
+  };
+  if (stream_id != current_stream_) {
+    refuse(ControllerStatus::kLeaseLost,
+           "stream: superseded by a newer stream on this lease; the arm holds");
+  } else if (!leases_.renew(lease_id, LeaseBook::Clock::now())) {
+    refuse(ControllerStatus::kLeaseLost,
+           "lease_id: the lease expired or was taken over; the arm holds");
+  } else if (arm_.state().mode == ArmMode::kStopped) {
+    refuse(ControllerStatus::kStopped,
+           std::string(stop_kind_name(stop_kind_)) + " stop: " + stop_reason_);
   } else if (auto error = target_error(target)) {
-    status = ControllerStatus::kInvalidTarget;
-    errors.push_back(std::move(*error));
+    refuse(ControllerStatus::kInvalidTarget, std::move(*error));
+  } else if (auto stale = stale_error(target)) {
+    refuse(ControllerStatus::kStale, std::move(*stale));
+  } else if (auto outside =
+                 target.position_m.allFinite()
+                     ? options_.limits.refusal(target.position_m, arm_.state().commanded_base)
+                     : std::nullopt) {
+    refuse(ControllerStatus::kOutsideLimits, std::move(*outside));
   } else {
-    const TargetStatus taken = arm_.set_target(target.position_m, target.orientation,
-                                               target.gripper_width_m, target.max_speed_m_per_s);
+    const double speed = options_.limits.capped_speed(target.max_speed_m_per_s,
+                                                      options_.arm.default_max_speed_m_per_s);
+    const TargetStatus taken =
+        arm_.set_target(target.position_m, target.orientation, target.gripper_width_m, speed);
     status = status_of(taken.code);
     if (taken.accepted()) {
       last_sequence_ = target.sequence;
@@ -179,9 +236,11 @@ ControllerReport ControllerStandIn::report_locked(ControllerStatus status,
   report.sequence = last_sequence_;
   report.status = status;
   report.errors = std::move(errors);
+  report.stop_kind = stop_kind_;
+  report.stop_reason = stop_reason_;
   if (status == ControllerStatus::kOk && report.arm.mode == ArmMode::kStopped) {
     report.status = ControllerStatus::kStopped;
-    report.errors.push_back("emergency stop: " + stop_reason_);
+    report.errors.push_back(std::string(stop_kind_name(stop_kind_)) + " stop: " + stop_reason_);
   }
   return report;
 }
@@ -203,20 +262,43 @@ std::optional<std::string> ControllerStandIn::lease_holder() const {
   return published_leases_.holder(LeaseBook::Clock::now());
 }
 
-ControllerReport ControllerStandIn::stop(const std::string& reason) {
+ControllerReport ControllerStandIn::stop(const std::string& reason, StopKind kind) {
+  if (kind == StopKind::kNone) throw_invalid_argument("kind", "protective or emergency", "none");
   const CallerLock lock(*this);
   arm_.stop();
-  stop_reason_ = reason.empty() ? "no reason given" : reason;
+  if (arm_.state().mode == ArmMode::kStopped && kind > stop_kind_) {
+    stop_kind_ = kind;
+    stop_reason_ = reason.empty() ? "no reason given" : reason;
+  }
   publish_locked();
   return report_locked(ControllerStatus::kOk, {});
 }
 
-void ControllerStandIn::resume(const std::string& lease_id) {
+ControllerStandIn::Cleared ControllerStandIn::resume(const ResumeRequest& request) {
   const CallerLock lock(*this);
-  require_lease(lease_id, LeaseBook::Clock::now());
+  if (arm_.state().mode != ArmMode::kStopped) {
+    throw_failed_precondition("the arm is not stopped: nothing to clear");
+  }
+  if (stop_kind_ == StopKind::kEmergency) {
+    if (request.operator_name.empty()) {
+      throw_invalid_argument("operator_name", "who clears the emergency stop (an operator action)",
+                             "\"\"");
+    }
+    if (request.acknowledged_reason != stop_reason_) {
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "acknowledged_reason: an emergency stop is cleared by acknowledging its reason "
+                  "\"" +
+                      stop_reason_ + "\", got \"" + request.acknowledged_reason + "\"");
+    }
+  } else {
+    require_lease(request.lease_id, LeaseBook::Clock::now());
+  }
+  Cleared cleared{stop_kind_, stop_reason_};
   arm_.resume();
+  stop_kind_ = StopKind::kNone;
   stop_reason_.clear();
   publish_locked();
+  return cleared;
 }
 
 ControllerStandIn::SceneReset ControllerStandIn::reset_scene(const std::string& lease_id,
@@ -224,8 +306,8 @@ ControllerStandIn::SceneReset ControllerStandIn::reset_scene(const std::string& 
   const CallerLock lock(*this);
   require_lease(lease_id, LeaseBook::Clock::now());
   if (arm_.state().mode == ArmMode::kStopped) {
-    throw_failed_precondition("the arm is emergency-stopped (" + stop_reason_ +
-                              "): resume it before resetting the scene");
+    throw_failed_precondition("the arm is stopped (" + std::string(stop_kind_name(stop_kind_)) +
+                              " stop: " + stop_reason_ + "): clear it before resetting the scene");
   }
   const Episode episode = arm_.reset(seed);
   publish_locked();

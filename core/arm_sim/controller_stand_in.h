@@ -1,8 +1,12 @@
 #pragma once
 // What pnp-robot-sim serves: a SimulatedArm behind the rules a real arm's controller
-// enforces for its network side. One lease holder drives it; targets must name the base
-// frame and carry increasing sequence numbers; an E-stop (from anyone) is honoured at
-// once and lasts until the lease holder resumes. Thread-safe: every change takes the
+// enforces for its network side. One lease holder drives it, over one stream at a time (a
+// new stream supersedes the old one); targets must name the base frame, carry increasing
+// sequence numbers, be fresh (their stamp) and stay within the controller's own limits
+// (controller_limits.h). Anyone may stop the arm, at once: an emergency stop lasts until
+// an operator clears it acknowledging its reason; a protective stop (what a client sends
+// when it loses track of the arm) may be cleared by the lease holder, as libfranka's
+// automatic error recovery clears a reflex. Thread-safe: every change takes the
 // arm's lock for the call (the control loop for one tick); state() reads the snapshot
 // published after each change, so it never waits for the loop.
 //
@@ -13,14 +17,17 @@
 
 #include <Eigen/Core>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <mutex>
 #include <optional>
 #include <stop_token>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
+#include "arm_sim/controller_limits.h"
 #include "arm_sim/simulated_arm.h"
 #include "robot/lease_book.h"
 
@@ -33,10 +40,14 @@ struct StandInOptions {
   sim::WorldProfile world = sim::kDefaultWorldProfile;  // the simulation's world profile
   ClockMode clock = ClockMode::kRealTime;
   std::string base_frame_id = "panda_link0";
-  double default_lease_timeout_s = 1.0;  // when a client asks for none
+  double default_lease_timeout_s = 0.5;  // when a client asks for none (the proto's default)
   double max_lease_timeout_s = 60.0;
+  ControllerLimits limits;  // the controller's own: never from the network
   ArmControllerOptions arm;
 };
+
+enum class StopKind { kNone, kProtective, kEmergency };
+std::string_view stop_kind_name(StopKind kind);  // "none", "protective", "emergency"
 
 // The outcome of a request, or the controller's condition, as the protocol reports it.
 enum class ControllerStatus {
@@ -45,7 +56,9 @@ enum class ControllerStatus {
   kUnreachable,
   kJointLimit,
   kStopped,
-  kLeaseLost
+  kLeaseLost,
+  kOutsideLimits,  // the controller's own workspace, table plane or step limit
+  kStale,          // the target's stamp is too old (or missing)
 };
 
 struct ControllerReport {
@@ -53,6 +66,8 @@ struct ControllerReport {
   std::uint64_t sequence = 0;  // the last target taken in on the lease's stream
   ControllerStatus status = ControllerStatus::kOk;
   std::vector<std::string> errors;  // why, for any status but kOk
+  StopKind stop_kind = StopKind::kNone;
+  std::string stop_reason;  // while stopped
 };
 
 struct TargetRequest {
@@ -62,6 +77,14 @@ struct TargetRequest {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   double gripper_width_m = 0;
   double max_speed_m_per_s = 0;
+  // When the client computed it; a target without one is stale.
+  std::optional<std::chrono::system_clock::time_point> stamp;
+};
+
+struct ResumeRequest {
+  std::string lease_id;             // a protective stop: the lease holder clears it
+  std::string acknowledged_reason;  // an emergency stop: its reason, as GetState reports it
+  std::string operator_name;        // an emergency stop: who clears it (logged)
 };
 
 class ControllerStandIn {
@@ -80,19 +103,30 @@ class ControllerStandIn {
   Lease acquire_lease(const std::string& client, double timeout_s);
   void release_lease(const std::string& lease_id);  // NOT_FOUND for an unknown lease
 
-  // A drive stream opens: INVALID_ARGUMENT unless `lease_id` is the current lease. The
-  // sequence numbering starts again.
-  void open_stream(const std::string& lease_id);
-  // One target of the stream opened with `lease_id`: taken in, or refused with a status
-  // (never an exception for bad target values). In lockstep the physics then advances
-  // one policy period, refused or not: time passes for a real arm too.
-  ControllerReport take_target(const std::string& lease_id, const TargetRequest& target);
+  // A drive stream opens: FAILED_PRECONDITION unless `lease_id` is the current lease. It
+  // supersedes any earlier stream (whose targets are refused from now on) and its
+  // sequence numbering starts again. Returns the stream's id.
+  std::uint64_t open_stream(const std::string& lease_id);
+  // One target of stream `stream_id`, opened with `lease_id`: taken in, or refused with a
+  // status (never an exception for bad target values). In lockstep the physics then
+  // advances one policy period, refused or not: time passes for a real arm too.
+  ControllerReport take_target(const std::string& lease_id, std::uint64_t stream_id,
+                               const TargetRequest& target);
 
   ControllerReport state() const;
   std::optional<std::string> lease_holder() const;
 
-  ControllerReport stop(const std::string& reason);  // anyone may
-  void resume(const std::string& lease_id);          // FAILED_PRECONDITION without the lease
+  // Anyone may. A stop never weakens one in force (a protective stop during an emergency
+  // stop stays an emergency stop) and keeps the first reason of its kind.
+  ControllerReport stop(const std::string& reason, StopKind kind);
+  // Clears a stop: an emergency stop needs an operator's name and its reason acknowledged
+  // word for word, a protective one the lease. FAILED_PRECONDITION (naming what is
+  // missing) otherwise, or when the arm is not stopped. Returns the stop it cleared.
+  struct Cleared {
+    StopKind kind = StopKind::kNone;
+    std::string reason;
+  };
+  Cleared resume(const ResumeRequest& request);
   struct SceneReset {
     ControllerReport report;
     Eigen::Vector3d goal_base;
@@ -100,6 +134,8 @@ class ControllerStandIn {
   SceneReset reset_scene(const std::string& lease_id, std::uint64_t seed);
 
   const std::string& base_frame_id() const { return options_.base_frame_id; }
+  // The grip point every pose names, from the flange (the model's site "grip").
+  double tcp_from_flange_m() const;
   ClockMode clock() const { return options_.clock; }
 
  private:
@@ -119,15 +155,18 @@ class ControllerStandIn {
     const ControllerStandIn& arm_;
   };
   std::optional<std::string> target_error(const TargetRequest& target) const;
+  std::optional<std::string> stale_error(const TargetRequest& target) const;
   void run_real_time(const std::stop_token& stop);
 
   const StandInOptions options_;
   mutable std::mutex mutex_;
   mutable std::atomic<int> callers_waiting_{0};
-  SimulatedArm arm_;                 // guarded by mutex_
-  robot::LeaseBook leases_;          // guarded by mutex_
-  std::uint64_t last_sequence_ = 0;  // guarded by mutex_
-  std::string stop_reason_;          // guarded by mutex_
+  SimulatedArm arm_;                      // guarded by mutex_
+  robot::LeaseBook leases_;               // guarded by mutex_
+  std::uint64_t last_sequence_ = 0;       // guarded by mutex_
+  std::uint64_t current_stream_ = 0;      // guarded by mutex_; 0: none yet
+  StopKind stop_kind_ = StopKind::kNone;  // guarded by mutex_
+  std::string stop_reason_;               // guarded by mutex_
   // The latest state, readable without waiting for the control loop's lock.
   mutable std::mutex published_mutex_;
   ControllerReport published_;         // guarded by published_mutex_

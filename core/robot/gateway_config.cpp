@@ -11,84 +11,20 @@
 
 #include "common/error.h"
 #include "common/validate.h"
+#include "robot/json_fields.h"
 
 namespace pnp::robot {
 namespace {
 
 using nlohmann::json;
-
-std::string key_path(std::string_view prefix, std::string_view key) {
-  return prefix.empty() ? std::string(key) : fmt::format("{}.{}", prefix, key);
-}
-
-// The keys of an object, each one known: a misspelt key would otherwise be ignored and its
-// setting silently left at the default.
-void require_object(const json& j, std::string_view path,
-                    std::initializer_list<std::string_view> known) {
-  if (!j.is_object()) {
-    throw_invalid_argument(path.empty() ? "gateway config" : path, "a JSON object", j.dump());
-  }
-  for (const auto& item : j.items()) {
-    bool found = false;
-    for (const std::string_view k : known) found = found || item.key() == k;
-    if (found) continue;
-    std::string expected;
-    for (const std::string_view k : known) expected.append(expected.empty() ? "" : ", ").append(k);
-    throw Error(ErrorCode::kInvalidArgument, fmt::format("{}: unknown key (expected one of {})",
-                                                         key_path(path, item.key()), expected));
-  }
-}
-
-void read_number(const json& object, std::string_view key, std::string_view prefix, double& out) {
-  const auto it = object.find(key);
-  if (it == object.end()) return;
-  if (!it->is_number()) throw_invalid_argument(key_path(prefix, key), "a number", it->dump());
-  out = it->get<double>();
-}
-
-void read_int(const json& object, std::string_view key, std::string_view prefix, int& out) {
-  const auto it = object.find(key);
-  if (it == object.end()) return;
-  // Unsigned and signed JSON integers are stored apart; either must fit an int.
-  constexpr auto kMax = static_cast<unsigned long long>(std::numeric_limits<int>::max());
-  const bool fits = it->is_number_unsigned()
-                        ? it->get<unsigned long long>() <= kMax
-                        : it->is_number_integer() &&
-                              it->get<long long>() >= std::numeric_limits<int>::min() &&
-                              it->get<long long>() <= std::numeric_limits<int>::max();
-  if (!fits) throw_invalid_argument(key_path(prefix, key), "an integer", it->dump());
-  out = it->get<int>();
-}
-
-void read_string(const json& object, std::string_view key, std::string_view prefix,
-                 std::string& out) {
-  const auto it = object.find(key);
-  if (it == object.end()) return;
-  if (!it->is_string()) throw_invalid_argument(key_path(prefix, key), "a string", it->dump());
-  out = it->get<std::string>();
-}
-
-void read_vector3(const json& object, std::string_view key, std::string_view prefix,
-                  Eigen::Vector3d& out) {
-  const auto it = object.find(key);
-  if (it == object.end()) return;
-  const std::string path = key_path(prefix, key);
-  if (!it->is_array() || it->size() != 3) {
-    throw_invalid_argument(path, "an array of 3 numbers [x, y, z]", it->dump());
-  }
-  for (std::size_t i = 0; i < 3; ++i) {
-    const json& v = (*it)[i];
-    if (!v.is_number())
-      throw_invalid_argument(fmt::format("{}[{}]", path, i), "a number", v.dump());
-    out(static_cast<Eigen::Index>(i)) = v.get<double>();
-  }
-}
+using namespace json_fields;
 
 SafetyLimits limits_from_json(const json& j) {
   constexpr std::string_view p = "limits";
-  require_object(j, p,
-                 {"workspace", "max_step_m", "max_speed_m_per_s", "max_rotation_step_rad",
-                  "gripper_min_width_m", "gripper_max_width_m", "quaternion_norm_tolerance"});
+  require_object(
+      j, p,
+      {"workspace", "table_top_z_m", "max_step_m", "max_speed_m_per_s", "max_rotation_step_rad",
+       "gripper_min_width_m", "gripper_max_width_m", "quaternion_norm_tolerance"});
   SafetyLimits limits;
   if (const auto ws = j.find("workspace"); ws != j.end()) {
     constexpr std::string_view wp = "limits.workspace";
@@ -96,6 +32,7 @@ SafetyLimits limits_from_json(const json& j) {
     read_vector3(*ws, "min_m", wp, limits.workspace.min_m);
     read_vector3(*ws, "max_m", wp, limits.workspace.max_m);
   }
+  read_number(j, "table_top_z_m", p, limits.table_top_z_m);
   read_number(j, "max_step_m", p, limits.max_step_m);
   read_number(j, "max_speed_m_per_s", p, limits.max_speed_m_per_s);
   read_number(j, "max_rotation_step_rad", p, limits.max_rotation_step_rad);
@@ -103,10 +40,6 @@ SafetyLimits limits_from_json(const json& j) {
   read_number(j, "gripper_max_width_m", p, limits.gripper_max_width_m);
   read_number(j, "quaternion_norm_tolerance", p, limits.quaternion_norm_tolerance);
   return limits;
-}
-
-json vector3_json(const Eigen::Vector3d& v) {
-  return json::array({v.x(), v.y(), v.z()});
 }
 
 void require_positive_finite(double value, std::string_view field, std::string_view unit) {
@@ -121,7 +54,7 @@ void require_positive_finite(double value, std::string_view field, std::string_v
 GatewayConfig GatewayConfig::from_json(const json& j) {
   require_object(j, "",
                  {"base_from_sim", "base_frame_id", "limits", "policy_period_s",
-                  "deadman_timeout_s", "max_episode_steps", "action_scale_m"});
+                  "deadman_timeout_s", "lease_timeout_s", "max_episode_steps", "action_scale_m"});
   GatewayConfig c;
   const auto transform = j.find("base_from_sim");
   if (transform == j.end()) {
@@ -134,6 +67,7 @@ GatewayConfig GatewayConfig::from_json(const json& j) {
   if (const auto limits = j.find("limits"); limits != j.end()) c.limits = limits_from_json(*limits);
   read_number(j, "policy_period_s", "", c.policy_period_s);
   read_number(j, "deadman_timeout_s", "", c.deadman_timeout_s);
+  read_number(j, "lease_timeout_s", "", c.lease_timeout_s);
   read_int(j, "max_episode_steps", "", c.max_episode_steps);
   read_number(j, "action_scale_m", "", c.action_scale_m);
   c.validate();
@@ -141,18 +75,7 @@ GatewayConfig GatewayConfig::from_json(const json& j) {
 }
 
 GatewayConfig GatewayConfig::load(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) {
-    throw Error(ErrorCode::kNotFound,
-                fmt::format("{}: cannot open the gateway config", path.string()));
-  }
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw Error(ErrorCode::kInvalidArgument,
-                fmt::format("{}: not valid JSON ({})", path.string(), e.what()));
-  }
+  const json j = read_file(path, "gateway config");
   try {
     return from_json(j);
   } catch (const Error& e) {
@@ -168,6 +91,7 @@ json GatewayConfig::to_json() const {
       {"limits",
        {{"workspace",
          {{"min_m", vector3_json(l.workspace.min_m)}, {"max_m", vector3_json(l.workspace.max_m)}}},
+        {"table_top_z_m", l.table_top_z_m},
         {"max_step_m", l.max_step_m},
         {"max_speed_m_per_s", l.max_speed_m_per_s},
         {"max_rotation_step_rad", l.max_rotation_step_rad},
@@ -176,6 +100,7 @@ json GatewayConfig::to_json() const {
         {"quaternion_norm_tolerance", l.quaternion_norm_tolerance}}},
       {"policy_period_s", policy_period_s},
       {"deadman_timeout_s", deadman_timeout_s},
+      {"lease_timeout_s", lease_timeout_s},
       {"max_episode_steps", max_episode_steps},
       {"action_scale_m", action_scale_m}};
 }
@@ -190,6 +115,13 @@ void GatewayConfig::validate() const {
         "deadman_timeout_s",
         fmt::format("more than policy_period_s ({} s), or it trips every cycle", policy_period_s),
         fmt::format("{}", deadman_timeout_s));
+  }
+  if (!std::isfinite(lease_timeout_s) || lease_timeout_s <= deadman_timeout_s ||
+      lease_timeout_s > 10) {
+    throw_invalid_argument(
+        "lease_timeout_s",
+        fmt::format("more than deadman_timeout_s ({} s) and at most 10 s", deadman_timeout_s),
+        fmt::format("{}", lease_timeout_s));
   }
   require_positive(max_episode_steps, "max_episode_steps");
   require_positive_finite(action_scale_m, "action_scale_m", "m");

@@ -5,12 +5,13 @@
 //
 //   {"base_from_sim": [[1, 0, 0, -0.88], [0, 1, 0, -0.75], [0, 0, 1, -0.4], [0, 0, 0, 1]],
 //    "base_frame_id": "panda_link0",
-//    "limits": {"workspace": {"min_m": [x, y, z], "max_m": [x, y, z]}, "max_step_m": 0.1,
+//    "limits": {"workspace": {"min_m": [x, y, z], "max_m": [x, y, z]}, "table_top_z_m": 0,
+//               "max_step_m": 0.1,
 //               "max_speed_m_per_s": 1.7, "max_rotation_step_rad": 0.2,
 //               "gripper_min_width_m": 0, "gripper_max_width_m": 0.08,
 //               "quaternion_norm_tolerance": 0.001},
-//    "policy_period_s": 0.04, "deadman_timeout_s": 0.1, "max_episode_steps": 50,
-//    "action_scale_m": 0.05}
+//    "policy_period_s": 0.04, "deadman_timeout_s": 0.1, "lease_timeout_s": 0.5,
+//    "max_episode_steps": 50, "action_scale_m": 0.05}
 //
 // Every key but base_from_sim may be left out and takes the default below. base_from_sim
 // is required: a frame calibration silently defaulted would move a real arm to the wrong
@@ -35,6 +36,9 @@ struct GatewayConfig {
   // The policy was trained with these; a different period changes what an action does.
   double policy_period_s = sim::layout::kStepDuration_s;  // 0.04 s (25 Hz)
   double deadman_timeout_s = 0.1;  // no fresh action for this long: the arm holds
+  // The lease the gateway asks for: the controller's own dead-man, which holds the arm
+  // when targets stop for this long (the protocol's default, 500 ms).
+  double lease_timeout_s = 0.5;
   int max_episode_steps = sim::layout::kEpisodeSteps;         // 50
   double action_scale_m = sim::layout::kActionPositionScale;  // per axis, per step
 
@@ -49,7 +53,8 @@ struct GatewayConfig {
 
   // INVALID_ARGUMENT naming the key: limits (SafetyLimits::validate), an empty
   // base_frame_id, non-positive periods or counts, a dead-man timeout not longer than the
-  // policy period (it would trip every cycle), or an action scale above limits.max_step_m
+  // policy period (it would trip every cycle), a lease timeout not longer than the
+  // dead-man's (the lease would lapse first), or an action scale above limits.max_step_m
   // (a full action along one axis would be refused).
   void validate() const;
 };

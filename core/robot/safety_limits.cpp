@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "sim/panda_hand.h"
 
 namespace pnp::robot {
 namespace {
@@ -29,25 +30,61 @@ SafetyVerdict refuse(SafetyRefusal refusal, std::string reason) {
 
 }  // namespace
 
-void SafetyLimits::validate() const {
+void validate_workspace(const WorkspaceBox& box, double table_top_z_m, std::string_view prefix) {
+  const std::string table_field = fmt::format("{}.table_top_z_m", prefix);
+  if (!std::isfinite(table_top_z_m) || std::abs(table_top_z_m) > kPandaReach_m) {
+    throw_invalid_argument(table_field,
+                           fmt::format("a finite height within {} m of the base", kPandaReach_m),
+                           fmt::format("{}", table_top_z_m));
+  }
   for (Eigen::Index i = 0; i < 3; ++i) {
     const auto axis = static_cast<std::size_t>(i);
-    const std::string min_field = fmt::format("limits.workspace.min_m[{}]", i);
-    const std::string max_field = fmt::format("limits.workspace.max_m[{}]", i);
-    if (!std::isfinite(workspace.min_m(i))) {
-      throw_invalid_argument(min_field, "a finite number", fmt::format("{}", workspace.min_m(i)));
+    const std::string min_field = fmt::format("{}.workspace.min_m[{}]", prefix, i);
+    const std::string max_field = fmt::format("{}.workspace.max_m[{}]", prefix, i);
+    if (!std::isfinite(box.min_m(i))) {
+      throw_invalid_argument(min_field, "a finite number", fmt::format("{}", box.min_m(i)));
     }
-    if (!std::isfinite(workspace.max_m(i))) {
-      throw_invalid_argument(max_field, "a finite number", fmt::format("{}", workspace.max_m(i)));
+    if (!std::isfinite(box.max_m(i))) {
+      throw_invalid_argument(max_field, "a finite number", fmt::format("{}", box.max_m(i)));
     }
-    if (workspace.min_m(i) >= workspace.max_m(i)) {
+    if (box.min_m(i) >= box.max_m(i)) {
       throw_invalid_argument(min_field,
-                             fmt::format("less than limits.workspace.max_m[{}] ({} m, the {} "
-                                         "axis)",
-                                         i, workspace.max_m(i), kAxes[axis]),
-                             fmt::format("{}", workspace.min_m(i)));
+                             fmt::format("less than {}.workspace.max_m[{}] ({} m, the {} axis)",
+                                         prefix, i, box.max_m(i), kAxes[axis]),
+                             fmt::format("{}", box.min_m(i)));
+    }
+    if (i < 2) {  // horizontal: within the reach on both sides of the base
+      for (const auto& [value, field] :
+           {std::pair{box.min_m(i), min_field}, std::pair{box.max_m(i), max_field}}) {
+        if (std::abs(value) > kPandaReach_m) {
+          throw_invalid_argument(
+              field,
+              fmt::format("within the Panda's reach, |{}| <= {} m", kAxes[axis], kPandaReach_m),
+              fmt::format("{}", value));
+        }
+      }
     }
   }
+  const double floor = sim::lowest_grip_point_z(table_top_z_m);
+  if (box.min_m.z() < floor) {
+    throw_invalid_argument(
+        fmt::format("{}.workspace.min_m[2]", prefix),
+        fmt::format("at least {:.4f} m: the table top ({} m) + the pads' reach below the grip "
+                    "point ({} m) + {} m clearance",
+                    floor, table_top_z_m, sim::kPadReachBelowGripPoint_m, sim::kPadClearance_m),
+        fmt::format("{}", box.min_m.z()));
+  }
+  const double ceiling = kPandaShoulderHeight_m + kPandaReach_m;
+  if (box.max_m.z() > ceiling) {
+    throw_invalid_argument(
+        fmt::format("{}.workspace.max_m[2]", prefix),
+        fmt::format("at most {} m: the shoulder's height plus the reach", ceiling),
+        fmt::format("{}", box.max_m.z()));
+  }
+}
+
+void SafetyLimits::validate() const {
+  validate_workspace(workspace, table_top_z_m, "limits");
   require_positive_finite(max_step_m, "limits.max_step_m", "m");
   require_positive_finite(max_speed_m_per_s, "limits.max_speed_m_per_s", "m/s");
   require_positive_finite(max_rotation_step_rad, "limits.max_rotation_step_rad", "rad");

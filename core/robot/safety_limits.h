@@ -26,13 +26,29 @@ struct WorkspaceBox {
   }
 };
 
+// The Panda's reach (Franka's datasheet: 855 mm from the shoulder, joint 2, which sits
+// 0.333 m above the base): a box corner beyond it is a typo, not a workspace.
+inline constexpr double kPandaReach_m = 0.855;
+inline constexpr double kPandaShoulderHeight_m = 0.333;
+
+// INVALID_ARGUMENT naming `<prefix>.workspace.min_m[i]` (or max_m, or `<prefix>.table_top_z_m`)
+// for a box that is not finite, has min >= max on an axis, lets the finger pads within
+// sim::kPadClearance_m of the table (a floor below sim::lowest_grip_point_z), or reaches
+// beyond the Panda's reach (kPandaReach_m horizontally from the base axis, or above the
+// shoulder plus the reach).
+void validate_workspace(const WorkspaceBox& box, double table_top_z_m, std::string_view prefix);
+
 // Defaults for a Franka Panda driven at the policy's 25 Hz (0.04 s per cycle).
 struct SafetyLimits {
   // The simulated task's gripper box (sim/world_layout.h kWorkspaceMin/Max, world x
-  // 1.05..1.55, y 0.40..1.10, z 0.405..0.85) widened by 3 cm in x, y and upwards (not
-  // downwards: the table top is 5 mm below its floor), seen from the simulated Panda's
-  // panda_link0 at world (0.88, 0.75, 0.40) with axes aligned to the world.
-  WorkspaceBox workspace{{0.14, -0.38, 0.005}, {0.70, 0.38, 0.48}};
+  // 1.05..1.55, y 0.40..1.10, z 0.405..0.85) widened by 3 cm in x, y and upwards, seen
+  // from the simulated Panda's panda_link0 at world (0.88, 0.75, 0.40) with axes aligned
+  // to the world; its floor is the lowest grip point that keeps the pads 2 mm above the
+  // table (sim::lowest_grip_point_z(0) = 12.1 mm, rounded up).
+  WorkspaceBox workspace{{0.14, -0.38, 0.013}, {0.70, 0.38, 0.48}};
+  // The table top's height in the base frame (the simulated table: world z 0.40, the
+  // base's height).
+  double table_top_z_m = 0.0;
   // A policy action moves at most 0.05 m per axis (0.087 m diagonally) per cycle; more
   // than 0.1 m between consecutive commands is not a policy step.
   double max_step_m = 0.1;
@@ -49,7 +65,7 @@ struct SafetyLimits {
   double quaternion_norm_tolerance = 1e-3;
 
   // INVALID_ARGUMENT naming the field (as `limits.<field>`) for a non-finite or
-  // non-positive limit, a box with min >= max on an axis, or a gripper range with
+  // non-positive limit, a box validate_workspace refuses, or a gripper range with
   // min >= max or min < 0.
   void validate() const;
 };

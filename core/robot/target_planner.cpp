@@ -28,6 +28,10 @@ PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameter
   if (!geometry::is_finite(arm.measured_base)) {
     throw_invalid_argument("measured pose", "finite values", "a non-finite pose");
   }
+  if (!arm.held_orientation_base.coeffs().allFinite() ||
+      std::abs(arm.held_orientation_base.norm() - 1) > config.limits.quaternion_norm_tolerance) {
+    throw_invalid_argument("held orientation", "a unit quaternion", "another value");
+  }
   if (!std::isfinite(arm.gap_m)) {
     throw_invalid_argument("gripper width", "a finite width", std::to_string(arm.gap_m));
   }
@@ -38,7 +42,9 @@ PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameter
                                    : commanded_sim.position_m;
 
   PlannedTarget planned;
-  planned.sim.orientation = commanded_sim.orientation;
+  planned.sim.orientation =
+      sim_from_base.apply(geometry::Pose{arm.commanded_base.position_m, arm.held_orientation_base})
+          .orientation;
   for (int k = 0; k < 3; ++k) {
     // std::clamp passes a NaN through, so check_target still sees and refuses it.
     planned.sim.position_m(k) =
@@ -47,6 +53,13 @@ PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameter
   }
   planned.base.gripper_width_m = gripper_width(config, world, arm.gap_m, action(3));
   planned.base.pose = config.base_from_sim.apply(planned.sim);
+  Eigen::Vector3d& p = planned.base.pose.position_m;
+  const WorkspaceBox& box = config.limits.workspace;
+  const Eigen::Vector3d in_box = p.cwiseMax(box.min_m).cwiseMin(box.max_m);
+  if (p.allFinite() && in_box != p) {
+    p = in_box;
+    planned.clamped = true;
+  }
 
   if (geometry::is_finite(planned.base.pose)) {
     const double max_step_m = std::min(config.limits.max_step_m,

@@ -6,10 +6,13 @@
 //   position  `paper`: the commanded grip point (the accumulated mocap target) moves by
 //             action_scale_m per unit; `gym`: the measured grip point does (gym resets the
 //             mocap target to the gripper before each action). Both are kept inside the
-//             simulation's gripper box, as the paper world keeps its target.
+//             simulation's gripper box, as the paper world keeps its target, and inside
+//             the gateway's workspace box (its floor keeps the pads off the table, as the
+//             table stops the fingers in the gym world).
 //   gripper   from the measured opening, by action[3] of the full range (`paper`), or by
 //             action[3] metres per finger (`gym`'s ctrl = q + a: effectively open or close).
-// The orientation is held: the policy does not turn the gripper. The target is then rate
+// The orientation is the episode's (the policy does not turn the gripper), never copied
+// back from the controller, which would let it drift. The target is then rate
 // limited (libfranka-style) and checked against the safety limits; a refused target must
 // not be sent.
 
@@ -26,6 +29,7 @@ struct PlannedTarget {
   geometry::Pose sim;         // the same pose in the simulation frame
   SafetyVerdict verdict;      // refused: hold instead
   bool rate_limited = false;  // the step was shortened to the speed limit
+  bool clamped = false;       // the position was brought into the gateway's box
 };
 
 // What the controller reports, in its base frame.
@@ -33,10 +37,12 @@ struct ArmReading {
   geometry::Pose commanded_base;  // the pose it is driving to
   geometry::Pose measured_base;   // where the grip point is
   double gap_m = 0;               // the measured finger opening
+  // What every target of the episode holds: its first commanded orientation.
+  Eigen::Quaterniond held_orientation_base = Eigen::Quaterniond::Identity();
 };
 
-// INVALID_ARGUMENT for a non-finite reading (the controller's own report, not the
-// policy's output: a policy NaN becomes a refusal).
+// INVALID_ARGUMENT for a non-finite reading or held orientation (the controller's own
+// report, not the policy's output: a policy NaN becomes a refusal).
 PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameters& world,
                           const ArmReading& arm, const sim::Action& action);
 

@@ -20,8 +20,37 @@ robot::v1::ControllerStatus to_proto(arm_sim::ControllerStatus status) {
       return robot::v1::CONTROLLER_STATUS_STOPPED;
     case S::kLeaseLost:
       return robot::v1::CONTROLLER_STATUS_LEASE_LOST;
+    case S::kOutsideLimits:
+      return robot::v1::CONTROLLER_STATUS_OUTSIDE_LIMITS;
+    case S::kStale:
+      return robot::v1::CONTROLLER_STATUS_STALE;
   }
   throw_internal("unknown controller status");
+}
+
+robot::v1::StopKind to_proto(arm_sim::StopKind kind) {
+  switch (kind) {
+    case arm_sim::StopKind::kNone:
+      return robot::v1::STOP_KIND_UNSPECIFIED;
+    case arm_sim::StopKind::kProtective:
+      return robot::v1::STOP_KIND_PROTECTIVE;
+    case arm_sim::StopKind::kEmergency:
+      return robot::v1::STOP_KIND_EMERGENCY;
+  }
+  throw_internal("unknown stop kind");
+}
+
+arm_sim::StopKind stop_kind_from_proto(robot::v1::StopKind kind) {
+  switch (kind) {
+    case robot::v1::STOP_KIND_PROTECTIVE:
+      return arm_sim::StopKind::kProtective;
+    case robot::v1::STOP_KIND_UNSPECIFIED:  // a stop that does not say is the safe kind
+    case robot::v1::STOP_KIND_EMERGENCY:
+      return arm_sim::StopKind::kEmergency;
+    default:
+      throw_invalid_argument("kind", "STOP_KIND_EMERGENCY or STOP_KIND_PROTECTIVE",
+                             std::to_string(static_cast<int>(kind)));
+  }
 }
 
 robot::v1::ControllerMode to_proto(arm_sim::ArmMode mode) {

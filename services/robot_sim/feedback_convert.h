@@ -10,6 +10,9 @@ namespace pnp::services {
 
 robot::v1::ControllerStatus to_proto(arm_sim::ControllerStatus status);
 robot::v1::ControllerMode to_proto(arm_sim::ArmMode mode);
+robot::v1::StopKind to_proto(arm_sim::StopKind kind);
+// UNSPECIFIED reads as emergency; INVALID_ARGUMENT for a value outside the enum.
+arm_sim::StopKind stop_kind_from_proto(robot::v1::StopKind kind);
 
 // The feedback for a report, in `frame_id`, with the object's pose (the stand-in's
 // "perception").

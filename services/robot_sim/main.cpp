@@ -2,7 +2,9 @@
 // pnp.robot.v1.RobotControllerService (and SimulatedSceneService to start seeded
 // episodes), for driving with pnp-robot-gateway without hardware.
 //   --address 127.0.0.1:50070  --object block  --clock realtime|lockstep
-//   [--metrics-address 127.0.0.1:9107]
+//   [--limits deploy/robot/controller.json] [--metrics-address 127.0.0.1:9107]
+// The limits file is the controller's own (workspace, table plane, step, speed, target
+// age): nothing over the network changes it.
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -21,7 +23,7 @@ int main(int argc, char** argv) {
   std::string object = "block";
   std::string clock = "realtime";
   std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
-  std::string metrics_address;
+  std::string metrics_address, limits;
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();
   app.add_option("--object", object, "object on the table: block, cylinder or small_block")
@@ -33,6 +35,9 @@ int main(int argc, char** argv) {
                  "one policy period of physics per target (fast evaluations)")
       ->check(CLI::IsMember({"realtime", "lockstep"}))
       ->capture_default_str();
+  app.add_option("--limits", limits,
+                 "the controller's own limits, JSON (deploy/robot/controller.json; empty: its "
+                 "defaults, the same values)");
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   CLI11_PARSE(app, argc, argv);
@@ -42,6 +47,7 @@ int main(int argc, char** argv) {
     options.world = pnp::sim::parse_world_profile(world, "--world");
     options.clock = clock == "lockstep" ? pnp::arm_sim::ClockMode::kLockstep
                                         : pnp::arm_sim::ClockMode::kRealTime;
+    if (!limits.empty()) options.limits = pnp::arm_sim::ControllerLimits::load(limits);
     pnp::arm_sim::ControllerStandIn arm(options);
     RobotControllerServiceImpl controller(arm);
     SimulatedSceneServiceImpl scene(arm);
@@ -57,6 +63,7 @@ int main(int argc, char** argv) {
                                   {{"object", object},
                                    {"world", world},
                                    {"clock", clock},
+                                   {"limits", options.limits.to_json()},
                                    {"base_frame", arm.base_frame_id()}});
   } catch (const pnp::Error& e) {
     log_event("robot_sim", "fatal", {{"error", e.what()}});

@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "services/common/robot_convert.h"
+#include "services/common/server_runtime.h"
 #include "services/common/status.h"
 #include "services/common/time_convert.h"
 #include "services/robot_sim/feedback_convert.h"
@@ -13,8 +14,17 @@ namespace {
 
 arm_sim::TargetRequest from_proto(const robot::v1::PoseTarget& target) {
   const geometry::Pose pose = services::from_proto(target.pose());
-  return {target.sequence(), target.frame_id(),        pose.position_m,
-          pose.orientation,  target.gripper_width_m(), target.max_speed_m_per_s()};
+  arm_sim::TargetRequest request{
+      target.sequence(),        target.frame_id(),          pose.position_m, pose.orientation,
+      target.gripper_width_m(), target.max_speed_m_per_s(), std::nullopt};
+  if (target.has_stamp()) {
+    try {
+      request.stamp = services::from_proto(target.stamp(), "stamp");
+    } catch (const Error&) {  // refused as stale (it names the stamp), not a broken stream
+      request.stamp = std::chrono::system_clock::time_point{};
+    }
+  }
+  return request;
 }
 
 void require_lease_id(const std::string& lease_id) {
@@ -62,17 +72,33 @@ grpc::Status RobotControllerServiceImpl::StreamPoseTargets(
     }
     const std::string lease_id = request.lease_id();
     require_lease_id(lease_id);
-    arm_.open_stream(lease_id);
+    const std::uint64_t stream_id = arm_.open_stream(lease_id);
+    {  // this stream supersedes the one before it: end that one now
+      std::lock_guard lock(stream_mutex_);
+      if (current_stream_ != nullptr) current_stream_->TryCancel();
+      current_stream_ = context;
+    }
+    struct Forget {  // on every way out: no later stream may cancel this finished one
+      RobotControllerServiceImpl& self;
+      grpc::ServerContext* context;
+      ~Forget() {
+        std::lock_guard lock(self.stream_mutex_);
+        if (self.current_stream_ == context) self.current_stream_ = nullptr;
+      }
+    } forget{*this, context};
     robot::v1::ControllerFeedback feedback;
     while (!context->IsCancelled() && stream->Read(&request)) {
       if (request.request_case() != robot::v1::StreamPoseTargetsRequest::kTarget) {
         throw_invalid_argument("request", "a target after the opening lease_id", "a lease_id");
       }
-      const auto report = arm_.take_target(lease_id, from_proto(request.target()));
+      const auto report = arm_.take_target(lease_id, stream_id, from_proto(request.target()));
       to_proto(report, arm_.base_frame_id(), feedback);
       if (!stream->Write(feedback)) break;
     }
-    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
+    if (context->IsCancelled()) {
+      return grpc::Status(grpc::StatusCode::CANCELLED,
+                          "cancelled (by the client, or superseded by a newer stream)");
+    }
     return grpc::Status::OK;
   });
 }
@@ -81,9 +107,13 @@ grpc::Status RobotControllerServiceImpl::GetState(grpc::ServerContext*,
                                                   const robot::v1::GetStateRequest*,
                                                   robot::v1::GetStateResponse* response) {
   return guarded([&] {
-    to_proto(arm_.state(), arm_.base_frame_id(), *response->mutable_state());
+    const arm_sim::ControllerReport state = arm_.state();
+    to_proto(state, arm_.base_frame_id(), *response->mutable_state());
     response->set_lease_holder(arm_.lease_holder().value_or(""));
     response->set_lockstep(arm_.clock() == arm_sim::ClockMode::kLockstep);
+    response->set_stop_kind(to_proto(state.stop_kind));
+    response->set_stop_reason(state.stop_reason);
+    response->set_tcp_from_flange_m(arm_.tcp_from_flange_m());
     return grpc::Status::OK;
   });
 }
@@ -92,17 +122,30 @@ grpc::Status RobotControllerServiceImpl::Stop(grpc::ServerContext*,
                                               const robot::v1::StopRequest* request,
                                               robot::v1::StopResponse* response) {
   return guarded([&] {
-    to_proto(arm_.stop(request->reason()), arm_.base_frame_id(), *response->mutable_state());
+    const arm_sim::StopKind kind = stop_kind_from_proto(request->kind());
+    const arm_sim::ControllerReport state = arm_.stop(request->reason(), kind);
+    log_event("robot_sim", "stop",
+              {{"kind", arm_sim::stop_kind_name(kind)},
+               {"reason", request->reason()},
+               {"in_force", arm_sim::stop_kind_name(state.stop_kind)}});
+    to_proto(state, arm_.base_frame_id(), *response->mutable_state());
     return grpc::Status::OK;
   });
 }
 
 grpc::Status RobotControllerServiceImpl::Resume(grpc::ServerContext*,
                                                 const robot::v1::ResumeRequest* request,
-                                                robot::v1::ResumeResponse*) {
+                                                robot::v1::ResumeResponse* response) {
   return guarded([&] {
-    require_lease_id(request->lease_id());
-    arm_.resume(request->lease_id());
+    const auto cleared = arm_.resume(
+        {request->lease_id(), request->acknowledged_reason(), request->operator_name()});
+    log_event("robot_sim", "stop_cleared",
+              {{"kind", arm_sim::stop_kind_name(cleared.kind)},
+               {"reason", cleared.reason},
+               {"operator", request->operator_name()},
+               {"by_lease_holder", cleared.kind == arm_sim::StopKind::kProtective}});
+    response->set_cleared_kind(to_proto(cleared.kind));
+    response->set_cleared_reason(cleared.reason);
     return grpc::Status::OK;
   });
 }

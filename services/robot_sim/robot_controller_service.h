@@ -2,7 +2,11 @@
 // pnp.robot.v1.RobotControllerService and SimulatedSceneService over the arm stand-in
 // (arm_sim::ControllerStandIn): the protocol's messages in, the stand-in's reports out.
 // A drive stream must open with a valid lease; each target is answered by exactly one
-// feedback message; a bad target is a status in its feedback, never a broken stream.
+// feedback message; a bad target is a status in its feedback, never a broken stream. A
+// new stream cancels the one before it. Stops and their clearing are logged with who and
+// why.
+
+#include <mutex>
 
 #include "arm_sim/controller_stand_in.h"
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
@@ -32,6 +36,8 @@ class RobotControllerServiceImpl final : public robot::v1::RobotControllerServic
 
  private:
   arm_sim::ControllerStandIn& arm_;
+  std::mutex stream_mutex_;
+  grpc::ServerContext* current_stream_ = nullptr;  // guarded by stream_mutex_
 };
 
 class SimulatedSceneServiceImpl final : public robot::v1::SimulatedSceneService::Service {

@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <condition_variable>
 #include <filesystem>
+#include <mutex>
 #include <thread>
 #include <tuple>
 
@@ -16,6 +19,7 @@
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
 #include "services/robot_sim/robot_controller_service.h"
+#include "sim/panda_hand.h"
 #include "support/checked_in_hierarchy.h"
 
 namespace pnp::gateway {
@@ -72,13 +76,18 @@ class StalledPolicyService final : public pv1::PolicyService::Service {
   }
 };
 
-// A controller whose readings are broken (a finger gap far below zero): the gateway must
-// end that episode with the reason, send nothing, and stay up.
+// A controller whose readings are broken in one way: the gateway must end that episode
+// with the reason naming the field, send nothing, and go on to the next episode.
+enum class Breakage { kFingerGap, kNanCommanded, kNoObject, kWrongFrame };
+
 class BrokenReadingController final : public rv1::RobotControllerService::Service,
                                       public rv1::SimulatedSceneService::Service {
  public:
-  grpc::Status AcquireLease(grpc::ServerContext*, const rv1::AcquireLeaseRequest*,
+  explicit BrokenReadingController(Breakage breakage, double tcp_m = sim::kGripPointFromFlange_m)
+      : breakage_(breakage), tcp_m_(tcp_m) {}
+  grpc::Status AcquireLease(grpc::ServerContext*, const rv1::AcquireLeaseRequest* request,
                             rv1::AcquireLeaseResponse* response) override {
+    holder_ = request->client_name();
     response->set_lease_id("lease");
     return grpc::Status::OK;
   }
@@ -88,14 +97,16 @@ class BrokenReadingController final : public rv1::RobotControllerService::Servic
   }
   grpc::Status ResetScene(grpc::ServerContext*, const rv1::ResetSceneRequest*,
                           rv1::ResetSceneResponse* response) override {
-    fill(*response->mutable_state());
+    fill(*response->mutable_state(), false);
     response->mutable_goal()->set_x_m(0.5);
     return grpc::Status::OK;
   }
   grpc::Status GetState(grpc::ServerContext*, const rv1::GetStateRequest*,
                         rv1::GetStateResponse* response) override {
-    fill(*response->mutable_state());
+    fill(*response->mutable_state(), true);
     response->set_lockstep(true);
+    response->set_lease_holder(holder_);
+    response->set_tcp_from_flange_m(tcp_m_);
     return grpc::Status::OK;
   }
   grpc::Status StreamPoseTargets(
@@ -108,20 +119,96 @@ class BrokenReadingController final : public rv1::RobotControllerService::Servic
     }
     return grpc::Status::OK;
   }
-  std::atomic<int> targets{0};
+  grpc::Status Stop(grpc::ServerContext*, const rv1::StopRequest* request,
+                    rv1::StopResponse*) override {
+    last_stop_kind = request->kind();
+    ++stops;
+    return grpc::Status::OK;
+  }
+  std::atomic<int> targets{0}, stops{0};
+  std::atomic<rv1::StopKind> last_stop_kind{rv1::STOP_KIND_UNSPECIFIED};
 
  private:
-  static void fill(rv1::ControllerFeedback& state) {
-    state.set_frame_id("panda_link0");
+  // The reset's reading is whole; the cycle's is broken.
+  void fill(rv1::ControllerFeedback& state, bool broken) const {
+    state.set_frame_id(broken && breakage_ == Breakage::kWrongFrame ? "world" : "panda_link0");
     state.mutable_measured()->mutable_position()->set_x_m(0.46);
     state.mutable_measured()->mutable_position()->set_z_m(0.2);
     state.mutable_measured()->mutable_orientation()->set_x(1);  // gripper down
     *state.mutable_commanded() = state.measured();
-    state.mutable_object()->mutable_pose()->mutable_position()->set_x_m(0.3);
-    state.mutable_object()->mutable_pose()->mutable_orientation()->set_w(1);
-    state.set_gripper_width_m(-0.05);  // 5 cm below closed: not a finger gap
+    if (broken && breakage_ == Breakage::kNanCommanded) {
+      state.mutable_commanded()->mutable_position()->set_y_m(std::nan(""));
+    }
+    if (!(broken && breakage_ == Breakage::kNoObject)) {
+      state.mutable_object()->mutable_pose()->mutable_position()->set_x_m(0.3);
+      state.mutable_object()->mutable_pose()->mutable_orientation()->set_w(1);
+    }
+    // 5 cm below closed: not a finger gap.
+    state.set_gripper_width_m(broken && breakage_ == Breakage::kFingerGap ? -0.05 : 0.04);
     state.set_mode(rv1::CONTROLLER_MODE_IDLE);
   }
+  const Breakage breakage_;
+  const double tcp_m_;
+  std::string holder_;
+};
+
+// The real stand-in's service, with GetState made to stall on demand (a paused
+// controller process): the stall lasts until the caller gives up or `release()`.
+class StallingController final : public rv1::RobotControllerService::Service {
+ public:
+  explicit StallingController(services::RobotControllerServiceImpl& inner) : inner_(inner) {}
+  void stall_next_get_state() { stall_next_ = true; }
+  // Blocks until a stalled GetState has started.
+  void wait_for_stall() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return stalled_calls_ > 0; });
+  }
+  int stalled_calls() {
+    std::lock_guard lock(mutex_);
+    return stalled_calls_;
+  }
+  grpc::Status GetState(grpc::ServerContext* context, const rv1::GetStateRequest* request,
+                        rv1::GetStateResponse* response) override {
+    if (stall_next_.exchange(false)) {
+      {
+        std::lock_guard lock(mutex_);
+        ++stalled_calls_;
+      }
+      changed_.notify_all();
+      while (!context->IsCancelled()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      return {grpc::StatusCode::CANCELLED, "stalled"};
+    }
+    return inner_.GetState(context, request, response);
+  }
+  grpc::Status AcquireLease(grpc::ServerContext* c, const rv1::AcquireLeaseRequest* q,
+                            rv1::AcquireLeaseResponse* r) override {
+    return inner_.AcquireLease(c, q, r);
+  }
+  grpc::Status ReleaseLease(grpc::ServerContext* c, const rv1::ReleaseLeaseRequest* q,
+                            rv1::ReleaseLeaseResponse* r) override {
+    return inner_.ReleaseLease(c, q, r);
+  }
+  grpc::Status StreamPoseTargets(
+      grpc::ServerContext* c,
+      grpc::ServerReaderWriter<rv1::ControllerFeedback, rv1::StreamPoseTargetsRequest>* s)
+      override {
+    return inner_.StreamPoseTargets(c, s);
+  }
+  grpc::Status Stop(grpc::ServerContext* c, const rv1::StopRequest* q,
+                    rv1::StopResponse* r) override {
+    return inner_.Stop(c, q, r);
+  }
+  grpc::Status Resume(grpc::ServerContext* c, const rv1::ResumeRequest* q,
+                      rv1::ResumeResponse* r) override {
+    return inner_.Resume(c, q, r);
+  }
+
+ private:
+  services::RobotControllerServiceImpl& inner_;
+  std::atomic<bool> stall_next_{false};
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  int stalled_calls_ = 0;  // guarded by mutex_
 };
 
 class GatewayEndToEnd : public ::testing::Test {
@@ -144,10 +231,7 @@ class GatewayEndToEnd : public ::testing::Test {
     policy_service_ = std::make_unique<services::PolicyServiceImpl>(db);
     policy_server_ = std::make_unique<services::ServerRuntime>(
         services::ServerConfig{"127.0.0.1:0", 4 << 20, {policy_service_.get()}, {}});
-    controller_ = std::make_unique<ControllerLink>(
-        grpc::CreateChannel(loopback(controller_server_->port()),
-                            grpc::InsecureChannelCredentials()),
-        loopback(controller_server_->port()), std::chrono::milliseconds(5000));
+    controller_ = link_to(controller_server_->port(), not_interrupted_);
     policy_stub_ = pv1::PolicyService::NewStub(
         grpc::CreateChannel(loopback(policy_server_->port()), grpc::InsecureChannelCredentials()));
   }
@@ -156,6 +240,12 @@ class GatewayEndToEnd : public ::testing::Test {
     policy_server_->shutdown(std::chrono::milliseconds(500));
     controller_server_->shutdown(std::chrono::milliseconds(500));
     std::filesystem::remove_all(dir_);
+  }
+
+  static std::unique_ptr<ControllerLink> link_to(int port, const std::atomic<bool>& interrupted) {
+    return std::make_unique<ControllerLink>(
+        grpc::CreateChannel(loopback(port), grpc::InsecureChannelCredentials()), loopback(port),
+        std::chrono::milliseconds(5000), interrupted);
   }
 
   EventLog recorder() {
@@ -216,14 +306,18 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
 }
 
-TEST_F(GatewayEndToEnd, InterruptStopsTheArmFirst) {
-  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
-  const robot::GatewayConfig config = panda_config();
-  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+TEST_F(GatewayEndToEnd, InterruptEmergencyStopsTheArmAndEndsTheRun) {
   std::atomic<bool> interrupted{true};
+  auto link = link_to(controller_server_->port(), interrupted);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, *link, *policy_stub_, recorder());
   const EpisodeReport report = runner.run(episode(902), interrupted);
   EXPECT_EQ(report.end, EpisodeEnd::kInterrupted);
+  EXPECT_TRUE(ends_run(report.end));
+  EXPECT_EQ(report.arm_left, "emergency_stop");
   EXPECT_EQ(arm_->state().arm.mode, arm_sim::ArmMode::kStopped);
+  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
 }
 
 TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
@@ -237,13 +331,16 @@ TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
   const auto before = arm_->state();
   const EpisodeReport report = runner.run(episode(903), not_interrupted_);
   EXPECT_EQ(report.end, EpisodeEnd::kDeadman);
+  EXPECT_FALSE(ends_run(report.end));
   EXPECT_NE(report.reason.find("inference did not answer"), std::string::npos) << report.reason;
   EXPECT_EQ(report.steps, 0);
-  // The one target sent was the hold: the commanded pose did not move.
+  // Nothing was sent (no older pose was replayed) and the arm was stopped protectively.
   const auto after = arm_->state();
-  EXPECT_EQ(after.sequence, 1u);
+  EXPECT_EQ(after.sequence, 0u);
   EXPECT_LT((after.arm.commanded_base.position_m - before.arm.commanded_base.position_m).norm(),
             1e-9);
+  EXPECT_EQ(report.arm_left, "protective_stop");
+  EXPECT_EQ(after.stop_kind, arm_sim::StopKind::kProtective);
   EXPECT_EQ(count("deadman"), 1);
   stalled_server.shutdown(std::chrono::milliseconds(100));
 }
@@ -286,38 +383,178 @@ TEST_F(GatewayEndToEnd, NoServedPolicyIsRefusedBeforeTheArmMoves) {
   }
 }
 
-TEST_F(GatewayEndToEnd, ABrokenReadingEndsTheEpisodeNotTheGateway) {
-  BrokenReadingController broken;
+class BrokenReadings : public GatewayEndToEnd,
+                       public ::testing::WithParamInterface<std::pair<Breakage, std::string>> {};
+
+TEST_P(BrokenReadings, EndOnlyThatEpisodeWithTheFieldNamed) {
+  const auto& [breakage, field] = GetParam();
+  BrokenReadingController broken(breakage);
   services::ServerRuntime broken_server(
       {"127.0.0.1:0",
        1 << 20,
        {static_cast<rv1::RobotControllerService::Service*>(&broken),
         static_cast<rv1::SimulatedSceneService::Service*>(&broken)},
        {}});
-  ControllerLink link(
-      grpc::CreateChannel(loopback(broken_server.port()), grpc::InsecureChannelCredentials()),
-      loopback(broken_server.port()), std::chrono::milliseconds(2000));
-  link.acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  auto link = link_to(broken_server.port(), not_interrupted_);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
   const robot::GatewayConfig config = panda_config();
-  GatewayEpisodeRunner runner(config, link, *policy_stub_, recorder());
+  GatewayEpisodeRunner runner(config, *link, *policy_stub_, recorder());
   for (std::uint64_t seed : {1u, 2u}) {  // the second episode runs as well
     const EpisodeReport report = runner.run(episode(seed), not_interrupted_);
     EXPECT_EQ(report.end, EpisodeEnd::kControllerFault);
-    EXPECT_NE(report.reason.find("finger_gap_m"), std::string::npos) << report.reason;
+    EXPECT_NE(report.reason.find(field), std::string::npos) << report.reason;
     EXPECT_EQ(report.steps, 0);
+    EXPECT_EQ(report.arm_left, "protective_stop");
   }
   EXPECT_EQ(broken.targets.load(), 0);  // nothing was sent
+  EXPECT_EQ(broken.stops.load(), 2);
+  EXPECT_EQ(broken.last_stop_kind.load(), rv1::STOP_KIND_PROTECTIVE);
   EXPECT_EQ(count("bad_reading"), 2);
   broken_server.shutdown(std::chrono::milliseconds(100));
 }
 
+INSTANTIATE_TEST_SUITE_P(
+    EveryBreakage, BrokenReadings,
+    ::testing::Values(std::pair{Breakage::kFingerGap, std::string("finger_gap_m")},
+                      std::pair{Breakage::kNanCommanded, std::string("commanded.position")},
+                      std::pair{Breakage::kNoObject, std::string("no perception of the object")},
+                      std::pair{Breakage::kWrongFrame, std::string("frame_id")}));
+
+TEST_F(GatewayEndToEnd, AControllerTrackingAnotherGripPointIsRefusedBeforeAnythingMoves) {
+  BrokenReadingController franka_default(Breakage::kFingerGap, 0.1034);
+  services::ServerRuntime server(
+      {"127.0.0.1:0",
+       1 << 20,
+       {static_cast<rv1::RobotControllerService::Service*>(&franka_default),
+        static_cast<rv1::SimulatedSceneService::Service*>(&franka_default)},
+       {}});
+  auto link = link_to(server.port(), not_interrupted_);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, *link, *policy_stub_, recorder());
+  try {
+    runner.run(episode(5), not_interrupted_);
+    ADD_FAILURE() << "drove a controller with another TCP";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("0.1034"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(franka_default.targets.load(), 0);
+  server.shutdown(std::chrono::milliseconds(100));
+}
+
+// A paused controller: GetState does not answer. The episode ends within the dead-man
+// time as a dead-man, and the next episode runs.
+TEST_F(GatewayEndToEnd, AStalledControllerEndsTheEpisodeAndTheRunGoesOn) {
+  StallingController stalling(*controller_service_);
+  services::ServerRuntime server(
+      {"127.0.0.1:0",
+       1 << 20,
+       {static_cast<rv1::RobotControllerService::Service*>(&stalling), scene_service_.get()},
+       {}});
+  auto link = link_to(server.port(), not_interrupted_);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  EventLog log = recorder();
+  int cycles = 0;
+  GatewayEpisodeRunner runner(config, *link, *policy_stub_,
+                              [&](std::string_view event, const nlohmann::json& fields) {
+                                if (event == "episode_start" && cycles++ == 0) {
+                                  stalling.stall_next_get_state();  // the first cycle's read
+                                }
+                                log(event, fields);
+                              });
+  const EpisodeReport stalled = runner.run(episode(905), not_interrupted_);
+  EXPECT_EQ(stalled.end, EpisodeEnd::kDeadman);
+  EXPECT_NE(stalled.reason.find("GetState"), std::string::npos) << stalled.reason;
+  EXPECT_EQ(stalling.stalled_calls(), 1);
+  EXPECT_EQ(stalled.arm_left, "protective_stop");
+  const EpisodeReport next = runner.run(episode(906), not_interrupted_);
+  EXPECT_TRUE(next.end == EpisodeEnd::kSuccess || next.end == EpisodeEnd::kStepCap)
+      << episode_end_name(next.end) << ": " << next.reason;
+  EXPECT_GT(next.steps, 0);
+  EXPECT_EQ(count("protective_stop_cleared"), 1);
+  server.shutdown(std::chrono::milliseconds(100));
+}
+
+// Ctrl-C while the controller stalls: the wait gives way at once (the stalled call is
+// cancelled, not waited out) and the arm is emergency-stopped.
+TEST_F(GatewayEndToEnd, InterruptDuringAStallStopsTheArm) {
+  StallingController stalling(*controller_service_);
+  services::ServerRuntime server(
+      {"127.0.0.1:0",
+       1 << 20,
+       {static_cast<rv1::RobotControllerService::Service*>(&stalling), scene_service_.get()},
+       {}});
+  std::atomic<bool> interrupted{false};
+  auto link = link_to(server.port(), interrupted);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  // The link's own wait, with a deadline far beyond the test's life: only the interrupt
+  // can end it.
+  stalling.stall_next_get_state();
+  std::jthread operator_thread([&] {
+    stalling.wait_for_stall();
+    interrupted.store(true);
+  });
+  try {
+    link->state(std::chrono::minutes(10));
+    ADD_FAILURE() << "the stalled call returned without the interrupt";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled) << e.what();
+  }
+  operator_thread.join();
+  // Through the runner: the cycle's stalled read ends as an interruption and an E-stop.
+  interrupted.store(false);
+  const robot::GatewayConfig config = panda_config();
+  EventLog log = recorder();
+  std::jthread interrupter;
+  GatewayEpisodeRunner runner(config, *link, *policy_stub_,
+                              [&](std::string_view event, const nlohmann::json& fields) {
+                                if (event == "episode_start") {
+                                  stalling.stall_next_get_state();
+                                  interrupter = std::jthread([&] {
+                                    while (stalling.stalled_calls() < 2) std::this_thread::yield();
+                                    interrupted.store(true);
+                                  });
+                                }
+                                log(event, fields);
+                              });
+  const EpisodeReport report = runner.run(episode(907), interrupted);
+  interrupter.join();
+  EXPECT_EQ(report.end, EpisodeEnd::kInterrupted) << report.reason;
+  EXPECT_EQ(report.arm_left, "emergency_stop");
+  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
+  server.shutdown(std::chrono::milliseconds(100));
+}
+
+// Someone else's E-stop ends the run; the gateway cannot clear it, an operator can.
+TEST_F(GatewayEndToEnd, AnEmergencyStopEndsTheRunUntilAnOperatorClearsIt) {
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+  arm_->stop("a person walked into the cell", arm_sim::StopKind::kEmergency);
+  const EpisodeReport report = runner.run(episode(908), not_interrupted_);
+  EXPECT_EQ(report.end, EpisodeEnd::kStopped);
+  EXPECT_TRUE(ends_run(report.end));
+  EXPECT_NE(report.reason.find("a person walked into the cell"), std::string::npos);
+  EXPECT_EQ(arm_->state().sequence, 0u);
+  try {
+    controller_->clear_protective_stop();
+    ADD_FAILURE() << "the lease holder cleared an emergency stop";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("operator_name"), std::string::npos) << e.what();
+  }
+  arm_->resume({"", "a person walked into the cell", "ops"});
+  const EpisodeReport after = runner.run(episode(908), not_interrupted_);
+  EXPECT_TRUE(after.end == EpisodeEnd::kSuccess || after.end == EpisodeEnd::kStepCap)
+      << episode_end_name(after.end) << ": " << after.reason;
+}
+
 TEST_F(GatewayEndToEnd, ASecondGatewayIsRefusedTheLease) {
   controller_->acquire_lease("first", std::chrono::milliseconds(5000));
-  ControllerLink second(
-      grpc::CreateChannel(loopback(controller_server_->port()), grpc::InsecureChannelCredentials()),
-      loopback(controller_server_->port()), std::chrono::milliseconds(2000));
+  auto second = link_to(controller_server_->port(), not_interrupted_);
   try {
-    second.acquire_lease("second", std::chrono::milliseconds(5000));
+    second->acquire_lease("second", std::chrono::milliseconds(5000));
     FAIL() << "two gateways hold the arm";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "sim/panda_hand.h"
 #include "sim_mjcf.h"
 
 namespace pnp::robot {
@@ -84,11 +85,12 @@ TEST(GatewayConfig, UnknownKeysAreRefusedWithTheirPath) {
   j["max_speed"] = 1;
   EXPECT_EQ(refusal_for(j),
             "max_speed: unknown key (expected one of base_from_sim, base_frame_id, limits, "
-            "policy_period_s, deadman_timeout_s, max_episode_steps, action_scale_m)");
+            "policy_period_s, deadman_timeout_s, lease_timeout_s, max_episode_steps, "
+            "action_scale_m)");
   j = minimal();
   j["limits"] = {{"max_step", 0.1}};
   EXPECT_EQ(refusal_for(j),
-            "limits.max_step: unknown key (expected one of workspace, max_step_m, "
+            "limits.max_step: unknown key (expected one of workspace, table_top_z_m, max_step_m, "
             "max_speed_m_per_s, max_rotation_step_rad, gripper_min_width_m, gripper_max_width_m, "
             "quaternion_norm_tolerance)");
   j = minimal();
@@ -196,16 +198,19 @@ TEST(GatewayConfig, DeployedConfigLoadsAndMatchesTheSimulatedPanda) {
 
   // The workspace holds the simulation's whole gripper box and start, seen from the base,
   // and the policy's timing is the simulation's.
+  // (its floor raised to keep the finger pads above the table)
+  const double floor_sim = c.base_from_sim.inverse().apply(c.limits.workspace.min_m).z();
   for (int corner = 0; corner < 8; ++corner) {
     const Eigen::Vector3d p(
         (corner & 1) ? sim::layout::kWorkspaceMax.x() : sim::layout::kWorkspaceMin.x(),
         (corner & 2) ? sim::layout::kWorkspaceMax.y() : sim::layout::kWorkspaceMin.y(),
-        (corner & 4) ? sim::layout::kWorkspaceMax.z() : sim::layout::kWorkspaceMin.z());
+        (corner & 4) ? sim::layout::kWorkspaceMax.z() : floor_sim);
     EXPECT_TRUE(c.limits.workspace.contains(c.base_from_sim.apply(p))) << p.transpose();
   }
   EXPECT_TRUE(c.limits.workspace.contains(c.base_from_sim.apply(sim::layout::kGripperStart)));
-  // ... but nothing below the table top (base z = 0).
-  EXPECT_GT(c.limits.workspace.min_m.z(), 0);
+  // ... but nothing that puts the pads into the table top (base z = 0).
+  EXPECT_GE(c.limits.workspace.min_m.z(), sim::lowest_grip_point_z(c.limits.table_top_z_m));
+  EXPECT_EQ(c.lease_timeout_s, GatewayConfig{}.lease_timeout_s);
   EXPECT_EQ(c.policy_period_s, sim::layout::kStepDuration_s);
   EXPECT_EQ(c.max_episode_steps, sim::layout::kEpisodeSteps);
   EXPECT_EQ(c.action_scale_m, sim::layout::kActionPositionScale);

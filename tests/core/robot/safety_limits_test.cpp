@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "robot/rate_limit.h"
+#include "sim/panda_hand.h"
 #include "sim/world_layout.h"
 #include "support/refusal.h"
 
@@ -48,22 +49,48 @@ TEST(SafetyLimits, DefaultsAreValidAndCoverTheSimulatedTaskBox) {
   EXPECT_NO_THROW(limits.validate());
   // The simulated Panda's panda_link0 sits at world (0.88, 0.75, 0.40), axes aligned.
   const Eigen::Vector3d base(0.88, 0.75, 0.40);
-  const Eigen::Vector3d lo = sim::layout::kWorkspaceMin - base;
+  Eigen::Vector3d lo = sim::layout::kWorkspaceMin - base;
   const Eigen::Vector3d hi = sim::layout::kWorkspaceMax - base;
+  // ... except its floor (5 mm above the table, where the pads would be in it), raised
+  // to the lowest grip point that keeps the pads clear.
+  EXPECT_LT(lo.z(), sim::lowest_grip_point_z(0));
+  lo.z() = limits.workspace.min_m.z();
   for (int corner = 0; corner < 8; ++corner) {
     const Eigen::Vector3d p((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
                             (corner & 4) ? hi.z() : lo.z());
     EXPECT_TRUE(limits.workspace.contains(p)) << p.transpose();
   }
   EXPECT_TRUE(limits.workspace.contains(sim::layout::kGripperStart - base));
-  // ... with the margin in x, y and up, none below (the table top is at base z = 0).
-  EXPECT_NEAR(limits.workspace.min_m.z(), lo.z(), 1e-12);
-  EXPECT_GT(limits.workspace.min_m.z(), 0);
+  // ... with the margin in x, y and up; the floor within a millimetre of the lowest.
+  EXPECT_GE(limits.workspace.min_m.z(), sim::lowest_grip_point_z(limits.table_top_z_m));
+  EXPECT_LT(limits.workspace.min_m.z(), sim::lowest_grip_point_z(limits.table_top_z_m) + 1e-3);
   EXPECT_NEAR((lo - limits.workspace.min_m).head<2>().minCoeff(), 0.03, 1e-12);
   EXPECT_NEAR((limits.workspace.max_m - hi).minCoeff(), 0.03, 1e-12);
   // A full policy action (0.05 m on each axis) is neither a too large step nor too fast
   // once clipped to the speed limit.
   EXPECT_LE(std::sqrt(3.0) * sim::layout::kActionPositionScale, limits.max_step_m);
+}
+
+TEST(SafetyLimits, AFloorThatLetsThePadsIntoTheTableOrAnImplausibleBoxIsRefused) {
+  SafetyLimits l;
+  l.workspace.min_m.z() = 0.005;  // the floor before: the pads 5 mm into the table
+  EXPECT_EQ(refusal([&] { l.validate(); }),
+            "limits.workspace.min_m[2]: expected at least 0.0121 m: the table top (0 m) + the "
+            "pads' reach below the grip point (0.0101 m) + 0.002 m clearance, got 0.005");
+  l = SafetyLimits{};
+  l.table_top_z_m = 0.05;  // the table moved up: the same floor is now inside it
+  EXPECT_NE(refusal([&] { l.validate(); }).find("limits.workspace.min_m[2]"), std::string::npos);
+  l = SafetyLimits{};
+  l.workspace.max_m.x() = 7.0;  // a typo for 0.7
+  EXPECT_EQ(refusal([&] { l.validate(); }),
+            "limits.workspace.max_m[0]: expected within the Panda's reach, |x| <= 0.855 m, got 7");
+  l = SafetyLimits{};
+  l.workspace.max_m.z() = 4.8;
+  EXPECT_NE(refusal([&] { l.validate(); }).find("limits.workspace.max_m[2]: expected at most"),
+            std::string::npos);
+  l = SafetyLimits{};
+  l.table_top_z_m = std::nan("");
+  EXPECT_NE(refusal([&] { l.validate(); }).find("limits.table_top_z_m"), std::string::npos);
 }
 
 TEST(SafetyLimits, ValidateNamesTheField) {
@@ -161,8 +188,8 @@ TEST(SafetyLimits, RefusesOutsideTheBoxOnEachAxis) {
       {{0.13, 0.0, 0.2}, "position (0.13, 0, 0.2) m outside workspace x [0.14, 0.7] m"},
       {{0.45, 0.39, 0.2}, "position (0.45, 0.39, 0.2) m outside workspace y [-0.38, 0.38] m"},
       {{0.45, -0.39, 0.2}, "position (0.45, -0.39, 0.2) m outside workspace y [-0.38, 0.38] m"},
-      {{0.45, 0.0, 0.49}, "position (0.45, 0, 0.49) m outside workspace z [0.005, 0.48] m"},
-      {{0.45, 0.0, 0.0}, "position (0.45, 0, 0) m outside workspace z [0.005, 0.48] m"},
+      {{0.45, 0.0, 0.49}, "position (0.45, 0, 0.49) m outside workspace z [0.013, 0.48] m"},
+      {{0.45, 0.0, 0.0}, "position (0.45, 0, 0) m outside workspace z [0.013, 0.48] m"},
   };
   for (const Case& c : cases) {
     const geometry::Pose near{c.p.cwiseMax(box.min_m).cwiseMin(box.max_m), kDown};

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/error.h"
+#include "sim/panda_hand.h"
 #include "sim/world_layout.h"
 
 namespace pnp::robot {
@@ -23,7 +24,7 @@ GatewayConfig config() {
 // The arm holding a 5 cm block: the commanded point 1 cm below the measured one, as when
 // the hand is pressed onto something (base frame).
 ArmReading holding() {
-  return {{{0.45, 0.0, 0.19}, kDown}, {{0.45, 0.0, 0.20}, kDown}, 0.05};
+  return {{{0.45, 0.0, 0.19}, kDown}, {{0.45, 0.0, 0.20}, kDown}, 0.05, kDown};
 }
 
 sim::Action action(double x, double y, double z, double grip) {
@@ -62,15 +63,21 @@ TEST(TargetPlanner, GymWorldMovesTheMeasuredPoint) {
               0.06, 1e-12);
 }
 
-TEST(TargetPlanner, OrientationIsHeldAndTheTargetStaysInTheSimulationBox) {
+TEST(TargetPlanner, OrientationIsTheEpisodesAndTheTargetStaysAboveTheFloor) {
   for (const auto* world : {&paper(), &gym()}) {
     ArmReading arm = holding();
-    arm.commanded_base.position_m.z() = 0.006;  // at the grip-point floor
-    arm.measured_base.position_m.z() = 0.006;
+    arm.commanded_base.position_m.z() = 0.014;  // just above the grip-point floor
+    arm.measured_base.position_m.z() = 0.014;
+    // The controller's commanded orientation has drifted by 0.05 rad: not copied back.
+    arm.commanded_base.orientation =
+        kDown * Eigen::Quaterniond(Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitZ()));
     const PlannedTarget t = plan_target(config(), *world, arm, action(0, 0, -1, -1));
     EXPECT_TRUE(t.verdict.ok()) << t.verdict.reason;
-    EXPECT_NEAR(t.sim.position_m.z(), sim::layout::kWorkspaceMin.z(), 1e-12);
+    EXPECT_TRUE(t.clamped);
+    EXPECT_NEAR(t.base.pose.position_m.z(), config().limits.workspace.min_m.z(), 1e-12);
+    EXPECT_GE(t.base.pose.position_m.z(), sim::lowest_grip_point_z(0));
     EXPECT_TRUE(t.base.pose.orientation.isApprox(kDown));
+    EXPECT_FALSE(plan_target(config(), *world, holding(), action(0, 0, 0.5, -1)).clamped);
   }
 }
 
@@ -93,6 +100,9 @@ TEST(TargetPlanner, APolicyNanIsRefusedAndABadReadingIsAnError) {
     EXPECT_THROW(plan_target(config(), *world, bad, action(0, 0, 0, -1)), Error);
     bad = holding();
     bad.gap_m = kNan;
+    EXPECT_THROW(plan_target(config(), *world, bad, action(0, 0, 0, -1)), Error);
+    bad = holding();
+    bad.held_orientation_base = Eigen::Quaterniond(0, 0, 0, 0);
     EXPECT_THROW(plan_target(config(), *world, bad, action(0, 0, 0, -1)), Error);
   }
 }

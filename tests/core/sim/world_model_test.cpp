@@ -7,6 +7,7 @@
 #include "common/error.h"
 #include "sim/inverse_kinematics.h"
 #include "sim/mujoco_data.h"
+#include "sim/panda_hand.h"
 #include "sim/pick_place_env.h"
 #include "sim/world_layout.h"
 #include "test_worlds.h"
@@ -133,6 +134,26 @@ TEST(Reachability, TheGripperIsDrivenToEveryTopCornerOfTheGoalRegionInEveryWorld
               << world_profile_name(profile) << " " << robot_name(robot) << " " << dx << " " << dy;
         }
       }
+    }
+  }
+}
+
+// The grip point and the pads' reach the gateway and the controller rely on
+// (sim/panda_hand.h) are the Panda model's, in every world.
+TEST(PandaHand, TheModelsGripSiteAndPadsAreTheOneDefinition) {
+  for (WorldProfile profile : kAllWorldProfiles) {
+    const auto w = WorldModel::load(Robot::kPanda, ObjectShape::kBlock, profile);
+    const mjModel* m = w->mj();
+    const int site = mj_name2id(m, mjOBJ_SITE, "grip");
+    const int hand = mj_name2id(m, mjOBJ_BODY, "gripper");  // at the flange
+    ASSERT_GE(site, 0);
+    ASSERT_EQ(m->site_bodyid[site], hand);
+    EXPECT_NEAR(m->site_pos[3 * site + 2], kGripPointFromFlange_m, 1e-12);
+    for (const char* pad : {"pad_left", "pad_right"}) {
+      const int g = mj_name2id(m, mjOBJ_GEOM, pad);
+      ASSERT_GE(g, 0);
+      const double tip = m->geom_pos[3 * g + 2] + m->geom_size[3 * g + 2];  // in the finger frame
+      EXPECT_NEAR(tip - kGripPointFromFlange_m, kPadReachBelowGripPoint_m, 5e-4) << pad;
     }
   }
 }
