@@ -27,6 +27,12 @@ using Jacobian = Eigen::Matrix<double, 6, kJoints>;
 
 constexpr double kUnitQuaternionTolerance = 1e-3;
 constexpr double kMaxIkStep_rad = 0.2;  // per iteration: keeps the linearisation valid
+// A braking reference slower than this on every joint is at rest (a Panda's joints report
+// about 1e-3 rad/s of noise at standstill).
+constexpr double kRestVelocity_rad_per_s = 1e-3;
+// The share of a joint's acceleration limit the reference plans its braking with: the
+// rest is headroom for the velocity loop's lag.
+constexpr double kBrakingFraction = 0.8;
 
 std::size_t at(int index) {
   return static_cast<std::size_t>(index);
@@ -76,6 +82,7 @@ const ArmControllerOptions& validated(const ArmControllerOptions& o) {
     throw_invalid_argument("velocity_limit_fraction", "a number in (0, 1]",
                            std::to_string(o.velocity_limit_fraction));
   }
+  for (double a : o.jerk_limits_rad_per_s3) require_positive_option(a, "jerk_limits_rad_per_s3");
   for (double a : o.acceleration_limits_rad_per_s2) {
     require_positive_option(a, "acceleration_limits_rad_per_s2");
   }
@@ -184,6 +191,7 @@ Episode SimulatedArm::reset(std::uint64_t seed) {
   episode_ = {layout.goal, base_from_world_.apply(layout.goal)};
   hold_measured_pose();
   torques_.fill(0);
+  torques_demanded_.fill(0);
   mode_ = ArmMode::kIdle;
   return episode_;
 }
@@ -321,7 +329,11 @@ void SimulatedArm::tick() {
   // step1 computes the current state's kinematics, mass matrix and bias forces; the
   // torques written between step1 and step2 act on this very step.
   mj_step1(m, d);
-  if (mode_ != ArmMode::kStopped) update_joint_command();
+  if (mode_ == ArmMode::kStopped) {
+    brake_joint_command();
+  } else {
+    update_joint_command();
+  }
   apply_joint_torques();
   mj_step2(m, d);
 }
@@ -332,25 +344,61 @@ void SimulatedArm::update_joint_command() {
   ik_iterations(segment_.at(next_time));
   const double dt = kControlPeriod_s;
   const double w = options_.reference_frequency_rad_per_s;
-  // Critically damped tracking of the IK solution's position and velocity. Acceleration
-  // and velocity are each scaled down as a whole vector when a joint would exceed its
-  // limit, never clipped joint by joint: clipping one joint would bend the TCP's path
-  // (on this arm, a fast move in x saturates joints 1 and 3, and clipping only them
-  // dips the gripper towards the table).
+  // The reference follows the IK solution with a velocity made of the solution's own and a
+  // correction proportional to the gap (bandwidth w / 2), the correction scaled down as
+  // one vector so that no joint moves faster than it could still stop within its gap at
+  // its acceleration limit (a saturating PD law overshoots by centimetres at the Panda's
+  // limits); a stiff velocity loop (2 w) turns that into an acceleration. The limits then
+  // scale the acceleration as one vector (integrate_joint_command).
+  const double position_gain = w / 2;
+  ArmVector ik_velocity, gap;
+  double correction_scale = 1;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    ik_velocity(i) = (ik_q_[j] - previous_ik[j]) / dt;
+    gap(i) = ik_q_[j] - command_q_[j];
+    const double wanted = position_gain * std::abs(gap(i));
+    const double stoppable = std::sqrt(
+        2 * kBrakingFraction * options_.acceleration_limits_rad_per_s2[j] * std::abs(gap(i)));
+    if (wanted > stoppable) correction_scale = std::min(correction_scale, stoppable / wanted);
+  }
   ArmVector accel;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    const double velocity = ik_velocity(i) + correction_scale * position_gain * gap(i);
+    accel(i) = 2 * w * (velocity - command_qd_[j]);
+  }
+  integrate_joint_command(accel);
+  if (mode_ == ArmMode::kTracking && segment_.finished(next_time)) mode_ = ArmMode::kHolding;
+}
+
+void SimulatedArm::integrate_joint_command(const ArmVector& accel) {
+  const double dt = kControlPeriod_s;
+  // The change of acceleration first (jerk), then the acceleration, then the velocity:
+  // each scaled as one vector, never clipped joint by joint, which would bend the TCP's
+  // path (on this arm, a fast move in x saturates joints 1 and 3, and clipping only them
+  // dips the gripper towards the table).
+  double jerk_scale = 1;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const double change = std::abs(accel(static_cast<Eigen::Index>(j)) - command_qdd_[j]);
+    const double limit = options_.jerk_limits_rad_per_s3[j] * dt;
+    if (change > limit) jerk_scale = std::min(jerk_scale, limit / change);
+  }
+  ArmVector limited;
   double accel_scale = 1;
   for (std::size_t j = 0; j < at(kJoints); ++j) {
     const auto i = static_cast<Eigen::Index>(j);
-    const double ik_velocity = (ik_q_[j] - previous_ik[j]) / dt;
-    accel(i) = w * w * (ik_q_[j] - command_q_[j]) + 2 * w * (ik_velocity - command_qd_[j]);
+    limited(i) = command_qdd_[j] + jerk_scale * (accel(i) - command_qdd_[j]);
     const double limit = options_.acceleration_limits_rad_per_s2[j];
-    if (std::abs(accel(i)) > limit) accel_scale = std::min(accel_scale, limit / std::abs(accel(i)));
+    if (std::abs(limited(i)) > limit) {
+      accel_scale = std::min(accel_scale, limit / std::abs(limited(i)));
+    }
   }
   ArmVector velocity;
   double velocity_scale = 1;
   for (std::size_t j = 0; j < at(kJoints); ++j) {
     const auto i = static_cast<Eigen::Index>(j);
-    velocity(i) = command_qd_[j] + accel_scale * accel(i) * dt;
+    velocity(i) = command_qd_[j] + accel_scale * limited(i) * dt;
     const double limit = options_.velocity_limit_fraction * options_.velocity_limits_rad_per_s[j];
     if (std::abs(velocity(i)) > limit) {
       velocity_scale = std::min(velocity_scale, limit / std::abs(velocity(i)));
@@ -367,7 +415,24 @@ void SimulatedArm::update_joint_command() {
     command_qd_[j] = qd;
     command_q_[j] = q;
   }
-  if (mode_ == ArmMode::kTracking && segment_.finished(next_time)) mode_ = ArmMode::kHolding;
+}
+
+void SimulatedArm::brake_joint_command() {
+  // Towards zero velocity along the current direction: the acceleration that would stop
+  // every joint this tick, which the limits then scale down as one vector (so the joints
+  // stop together and the TCP stays on its line). Once at rest, it holds there.
+  ArmVector accel;
+  bool moving = false;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    accel(static_cast<Eigen::Index>(j)) = -command_qd_[j] / kControlPeriod_s;
+    moving = moving || std::abs(command_qd_[j]) > kRestVelocity_rad_per_s;
+  }
+  if (!moving) {
+    command_qd_.fill(0);
+    command_qdd_.fill(0);
+    return;
+  }
+  integrate_joint_command(accel);
 }
 
 void SimulatedArm::ik_iterations(const Pose& setpoint_world) {
@@ -428,7 +493,8 @@ void SimulatedArm::apply_joint_torques() {
   for (std::size_t j = 0; j < at(kJoints); ++j) {
     const auto dof = at(dof_adr_[j]);
     const double limit = options_.torque_limits_nm[j];
-    torques_[j] = std::clamp(mass_accel_[dof] + d->qfrc_bias[dof], -limit, limit);
+    torques_demanded_[j] = mass_accel_[dof] + d->qfrc_bias[dof];
+    torques_[j] = std::clamp(torques_demanded_[j], -limit, limit);
     d->qfrc_applied[dof] = torques_[j];
   }
 }
@@ -452,9 +518,9 @@ bool SimulatedArm::physics_faulted() const {
 }
 
 void SimulatedArm::stop() {
-  if (mode_ == ArmMode::kFault) return;
-  // Hold exactly the posture measured now; the interpolator and the IK are bypassed.
-  hold_measured_pose();
+  if (mode_ == ArmMode::kFault || mode_ == ArmMode::kStopped) return;
+  // The joint reference keeps its position and velocity and brakes from there
+  // (brake_joint_command, every tick); the interpolator and the IK are bypassed.
   mode_ = ArmMode::kStopped;
 }
 
@@ -535,6 +601,7 @@ ArmState SimulatedArm::state() const {
     s.joint_velocities[j] = d->qvel[dof_adr_[j]];
   }
   s.joint_torques = torques_;
+  s.joint_torques_demanded = torques_demanded_;
   return s;
 }
 

@@ -73,10 +73,11 @@ struct ArmControllerOptions {
   // measured velocity stays within them.
   JointVector velocity_limits_rad_per_s{2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61};
   double velocity_limit_fraction = 0.9;
-  // Three times Franka's datasheet values (15, 7.5, 10, 12.5, 15, 20, 20): with those a
-  // 5 cm step takes 0.25 s from the home posture; with these it settles in 0.15 s while
-  // the torques stay under their limits (peak ~85 N m on joint 1).
-  JointVector acceleration_limits_rad_per_s2{45, 22.5, 30, 37.5, 45, 60, 60};
+  // Franka's datasheet values, which libfranka's rate limiter enforces: a reference that
+  // asked for more would raise a reflex error on a real Panda. The acceleration and its
+  // rate of change (jerk) are each scaled down as one vector, like the velocity.
+  JointVector acceleration_limits_rad_per_s2{15, 7.5, 10, 12.5, 15, 20, 20};
+  JointVector jerk_limits_rad_per_s3{7500, 3750, 5000, 6250, 7500, 10000, 10000};
   JointVector torque_limits_nm{87, 87, 87, 87, 12, 12, 12};
 };
 
@@ -86,7 +87,7 @@ enum class ArmMode {
   kIdle,      // after reset(): holding the home posture, no target yet
   kTracking,  // interpolating towards the latest target
   kHolding,   // the latest target's segment has ended: holding it
-  kStopped,   // E-stop: holding the joint posture measured at stop(); targets refused
+  kStopped,   // stop(): decelerating within the limits, then holding; targets refused
   kFault,     // the physics became unstable: only reset() recovers
 };
 
@@ -123,6 +124,9 @@ struct ArmState {
   JointVector joint_positions{};
   JointVector joint_velocities{};
   JointVector joint_torques{};  // last commanded torques, after clamping
+  // What the tracking loop asked for before clamping: above a torque limit means the
+  // reference asked for more than the motors give (a real Panda would fault).
+  JointVector joint_torques_demanded{};
 };
 
 class SimulatedArm {
@@ -149,7 +153,10 @@ class SimulatedArm {
   // a negative or non-finite duration. No heap allocation.
   void advance(double seconds);
 
-  void stop();    // E-stop: hold the measured joint posture at once, refuse targets
+  // A controlled stop (IEC 60204-1 category 2, as a Panda's stop): the joint reference
+  // leaves its path's set point and brakes along its current direction within the
+  // acceleration and jerk limits, then holds where it came to rest; targets are refused.
+  void stop();
   void resume();  // leave the E-stop holding the measured TCP pose
 
   ArmState state() const;
@@ -177,6 +184,10 @@ class SimulatedArm {
   TargetStatus check_reachable(const Pose& target_world);
   void tick();
   void update_joint_command();
+  void brake_joint_command();
+  // Moves the joint reference one tick with acceleration `accel` (rad/s^2), scaled down
+  // as one vector to the jerk and acceleration limits, then the velocity limits.
+  void integrate_joint_command(const Eigen::Matrix<double, kJoints, 1>& accel);
   void ik_iterations(const Pose& setpoint_world);
   void apply_joint_torques();
   void refresh_derived();
@@ -213,6 +224,7 @@ class SimulatedArm {
   JointVector command_qd_{};
   JointVector command_qdd_{};
   JointVector torques_{};
+  JointVector torques_demanded_{};
 };
 
 }  // namespace pnp::arm_sim
