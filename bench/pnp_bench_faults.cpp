@@ -2,7 +2,8 @@
 // (tests/data/panda_block, or --checkpoints DIR) drives the simulated Panda in real time
 // for --episodes episodes, each with one seeded fault: a stalled controller, a stalled
 // inference answer, a broken reading, a dropped drive stream, an E-stop from the cell, or
-// a gateway whose table is configured 3 cm too low. Prints one JSON object
+// a gateway whose table is configured 3 cm too low while the policy dives. Prints one JSON
+// object
 // (bench/faults/fault_run.h); exits 1 when a verdict fails: a target outside the
 // controller's box taken in, a fault not followed by a held or stopped arm within the
 // dead-man time, or fewer episodes completed than asked.

@@ -2,9 +2,9 @@
 // The faults pnp-bench-faults injects, one per episode, and their seeded schedule. Each
 // is something that happens to a real cell: a controller or an inference server that
 // stops answering for a while, a reading the controller should never send, a network
-// that drops the drive stream, a person pressing the E-stop, and a gateway whose
-// calibration is wrong (its box and transform put targets below the table: only the
-// controller's own limits are left to catch them).
+// that drops the drive stream, a person pressing the E-stop, and a gateway whose table
+// is configured 3 cm too low while the policy drives down into it (only the controller's
+// own limits are left to keep the pads off the table).
 
 #include <cstdint>
 #include <string_view>
@@ -18,7 +18,7 @@ enum class FaultKind {
   kBrokenReading,         // one GetState answer with a NaN, a zero quaternion or no object
   kDroppedStream,         // the drive stream breaks on a target (the target is lost)
   kEmergencyStop,         // someone in the cell stops the arm (an operator clears it)
-  kMiscalibratedGateway,  // the whole episode, through a gateway 3 cm off in height
+  kMiscalibratedGateway,  // the whole episode: the gateway's table 3 cm low, the policy diving
 };
 inline constexpr int kFaultKinds = 6;
 std::string_view fault_kind_name(FaultKind kind);

@@ -85,7 +85,7 @@ nlohmann::json per_kind(const std::vector<EpisodeRecord>& records, const ArmMoni
                         double deadman_ms, int& not_held) {
   struct Kind {
     int planned = 0, fired = 0;
-    std::map<std::string, int> ends, arm_left;
+    std::map<std::string, int> ends, arm_left, controller_refusals;
     std::vector<double> hold_ms, ended_ms;
     int taken_after_deadman = 0;
   };
@@ -98,6 +98,9 @@ nlohmann::json per_kind(const std::vector<EpisodeRecord>& records, const ArmMoni
     if (!whole_episode && !r.fired) continue;  // the episode ended before its call came
     ++k.fired;
     ++k.ends[std::string(gateway::episode_end_name(r.report.end))];
+    for (const auto& [reason, n] : r.report.controller_refusals_by_reason) {
+      k.controller_refusals[reason] += n;
+    }
     ++k.arm_left[r.report.arm_left.rfind("stop not delivered", 0) == 0 ? "stop_not_delivered"
                                                                        : r.report.arm_left];
     if (whole_episode) continue;
@@ -117,6 +120,7 @@ nlohmann::json per_kind(const std::vector<EpisodeRecord>& records, const ArmMoni
                  {"fired", k.fired},
                  {"ends", k.ends},
                  {"arm_left", k.arm_left},
+                 {"controller_refusals_by_reason", k.controller_refusals},
                  {"held_after_fault_ms", latency_json(k.hold_ms)},
                  {"episode_ended_after_fault_ms", latency_json(k.ended_ms)},
                  {"targets_taken_after_deadman", k.taken_after_deadman}};
@@ -189,12 +193,14 @@ nlohmann::json run_faults(const FaultRunSpec& spec) {
       EpisodeRecord record{plan[static_cast<std::size_t>(e)], {}, Clock::now(), {}, {}};
       const bool wrong_config = record.fault.kind == FaultKind::kMiscalibratedGateway;
       faults.arm(wrong_config ? std::nullopt : std::optional(record.fault));
+      faults.set_policy_dives(wrong_config);
       gateway::EpisodeOptions episode;
       episode.seed = spec.seed + static_cast<std::uint64_t>(e);
       record.report = (wrong_config ? wrong_gateway : planned_gateway).run(episode, never);
       record.ended = Clock::now();
       record.fired = faults.fired_at();
       faults.arm(std::nullopt);
+      faults.set_policy_dives(false);
       if (record.report.end == gateway::EpisodeEnd::kStopped) {
         operator_clears_stop(*operator_stub);
         ++operator_clears;

@@ -40,6 +40,16 @@ std::optional<FaultSwitch::Clock::time_point> FaultSwitch::fired_at() const {
   return fired_;
 }
 
+void FaultSwitch::set_policy_dives(bool dives) {
+  const std::lock_guard lock(mutex_);
+  policy_dives_ = dives;
+}
+
+bool FaultSwitch::policy_dives() const {
+  const std::lock_guard lock(mutex_);
+  return policy_dives_;
+}
+
 void FaultSwitch::stall_controller_until(Clock::time_point until) {
   const std::lock_guard lock(mutex_);
   stalled_until_ = until;

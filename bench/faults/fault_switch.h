@@ -27,6 +27,10 @@ class FaultSwitch {
   std::optional<FaultKind> fire(CallSite site);
   std::optional<Clock::time_point> fired_at() const;
 
+  // A policy that drives down into the table (every answer's dz = -1) while set.
+  void set_policy_dives(bool dives);
+  bool policy_dives() const;
+
   // A stalled controller: every call waits until then.
   void stall_controller_until(Clock::time_point until);
   Clock::time_point controller_stalled_until() const;
@@ -37,6 +41,7 @@ class FaultSwitch {
   int counts_[3] = {0, 0, 0};               // guarded by mutex_
   std::optional<Clock::time_point> fired_;  // guarded by mutex_
   Clock::time_point stalled_until_{};       // guarded by mutex_
+  bool policy_dives_ = false;               // guarded by mutex_
 };
 
 }  // namespace pnp::faults

@@ -27,6 +27,7 @@ grpc::Status FaultyPolicy::PredictSession(
   while (!context->IsCancelled() && stream->Read(&request)) {
     const bool stalled = faults_.fire(CallSite::kPredict) == FaultKind::kInferenceStall;
     if (!upstream->Write(request) || !upstream->Read(&response)) break;
+    if (faults_.policy_dives()) response.mutable_prediction()->mutable_action()->set_dz(-1);
     const auto until = FaultSwitch::Clock::now() + stall_;
     while (stalled && FaultSwitch::Clock::now() < until && !context->IsCancelled()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));

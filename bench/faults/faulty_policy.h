@@ -1,7 +1,8 @@
 #pragma once
 // A fault-injecting proxy in front of the inference service (pnp.policy.v1): every call
 // is forwarded over gRPC, and an armed inference stall holds one PredictSession answer
-// back for `stall` (as a server stuck in a pause would).
+// back for `stall` (as a server stuck in a pause would); while the switch says the policy
+// dives, every answer drives straight down (dz = -1).
 
 #include <grpcpp/grpcpp.h>
 

@@ -96,6 +96,12 @@ TEST(FaultRun, EveryFaultEndsInAHeldOrStoppedArmAndTheRunCompletes) {
   EXPECT_EQ(f["emergency_stop"]["arm_left"]["emergency_stop"], 1);
   EXPECT_EQ(out["operator_clears"], 1);
   EXPECT_EQ(f["miscalibrated_gateway"]["fired"], 1);
+  // The gateway let the diving policy's targets below the table through; the controller
+  // refused them.
+  EXPECT_GT(f["miscalibrated_gateway"]["controller_refusals_by_reason"]
+             ["CONTROLLER_STATUS_OUTSIDE_LIMITS"]
+                 .get<int>(),
+            0);
   std::filesystem::remove_all(spec.work_dir);
 }
 
