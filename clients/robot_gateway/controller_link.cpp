@@ -1,5 +1,7 @@
 #include "clients/robot_gateway/controller_link.h"
 
+#include <algorithm>
+
 #include "services/common/status.h"
 #include "services/common/time_convert.h"
 
@@ -87,7 +89,11 @@ void ControllerLink::release_lease() {
   rv1::ReleaseLeaseRequest request;
   request.set_lease_id(lease_id_);
   lease_id_.clear();
-  call<rv1::ReleaseLeaseResponse>("ReleaseLease", rpc_timeout_, false,
+  // After Ctrl-C the operator waits for the gateway: a stalled controller gets a short
+  // try, and its lease lapses by itself anyway (the controller's dead-man).
+  const auto timeout =
+      interrupted_.load() ? std::min(rpc_timeout_, kReleaseAfterInterrupt) : rpc_timeout_;
+  call<rv1::ReleaseLeaseResponse>("ReleaseLease", timeout, false,
                                   [&](grpc::ClientContext* c, grpc::CompletionQueue* q) {
                                     return controller_->AsyncReleaseLease(c, request, q);
                                   });

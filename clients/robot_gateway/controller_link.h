@@ -23,6 +23,8 @@ class ControllerLink {
   using Clock = std::chrono::steady_clock;
   // How often a waiting call looks at the interrupt flag: well inside one policy period.
   static constexpr std::chrono::milliseconds kInterruptPoll{5};
+  // How long giving the lease back may take once the operator has interrupted.
+  static constexpr std::chrono::milliseconds kReleaseAfterInterrupt{100};
 
   // `interrupted` (the operator's Ctrl-C) must outlive the link.
   ControllerLink(std::shared_ptr<grpc::Channel> channel, std::string address,

@@ -1,0 +1,116 @@
+// Integration: the real robot binaries with a real stall. pnp-inference-server serves the
+// checked-in Panda hierarchy, pnp-robot-sim runs the simulated Panda in real time, and
+// pnp-robot-gateway drives it; the controller process is then paused (SIGSTOP) in the
+// middle of an episode, as a controller that stops answering is. The gateway must end
+// that episode on its dead-man and go on with the next, and Ctrl-C during a stall must
+// end it at once.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+
+#include "store/checkpoint_import.h"
+#include "store/run_store.h"
+#include "tests/integration/child_process.h"
+
+namespace {
+
+using pnp::integration::ChildProcess;
+using pnp::integration::TempDir;
+using namespace std::chrono_literals;
+
+struct RobotCell {
+  explicit RobotCell(const TempDir& dir)
+      : inference("inference",
+                  {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db",
+                   served_store(dir)},
+                  dir.path()),
+        controller("robot_sim",
+                   {PNP_BIN_DIR "/pnp-robot-sim", "--address", "127.0.0.1:0", "--clock", "realtime",
+                    "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"},
+                   dir.path()) {}
+
+  static std::string served_store(const TempDir& dir) {
+    const std::string db = dir.file("pnp.db");
+    pnp::store::RunStore store(db);
+    pnp::store::import_hierarchy(store, PNP_SOURCE_DIR "/tests/data/panda_block", "panda", "block");
+    return db;
+  }
+
+  ChildProcess gateway(const TempDir& dir, int episodes) {
+    return ChildProcess("gateway",
+                        {PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
+                         "127.0.0.1:" + std::to_string(controller.port()), "--inference",
+                         "127.0.0.1:" + std::to_string(inference.port()), "--config",
+                         PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes",
+                         std::to_string(episodes), "--seed", "1000", "--json"},
+                        dir.path());
+  }
+
+  ChildProcess inference;
+  ChildProcess controller;
+};
+
+// Waits until the gateway has logged `count` episode starts; false after `timeout`.
+bool wait_for_episode_start(ChildProcess& gateway, int count, std::chrono::milliseconds timeout) {
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < until) {
+    const std::string log = gateway.stderr_text();
+    int seen = 0;
+    for (auto at = log.find("\"episode_start\""); at != std::string::npos;
+         at = log.find("\"episode_start\"", at + 1)) {
+      ++seen;
+    }
+    if (seen >= count) return true;
+    std::this_thread::sleep_for(5ms);
+  }
+  return false;
+}
+
+TEST(GatewayStall, APausedControllerEndsTheEpisodeOnTheDeadmanAndTheRunGoesOn) {
+  TempDir dir("gateway_stall");
+  RobotCell cell(dir);
+  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
+  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
+  ChildProcess gateway = cell.gateway(dir, 3);
+  ASSERT_TRUE(wait_for_episode_start(gateway, 1, 30s)) << gateway.diagnostics();
+  std::this_thread::sleep_for(200ms);  // a few cycles into the episode
+  cell.controller.send_signal(SIGSTOP);
+  std::this_thread::sleep_for(400ms);  // four dead-man times
+  cell.controller.send_signal(SIGCONT);
+  const auto status = gateway.wait(60s);
+  ASSERT_TRUE(status) << gateway.diagnostics();
+  EXPECT_TRUE(status->ok()) << gateway.diagnostics();
+  const nlohmann::json summary = nlohmann::json::parse(gateway.stdout_text());
+  EXPECT_EQ(summary["episodes"], 3) << summary.dump();
+  EXPECT_EQ(summary["ends"].value("deadman", 0), 1) << summary.dump();
+  EXPECT_NE(gateway.stderr_text().find("did not answer"), std::string::npos)
+      << gateway.diagnostics();
+}
+
+TEST(GatewayStall, CtrlCDuringAStallEndsTheGatewayAtOnce) {
+  TempDir dir("gateway_stall_interrupt");
+  RobotCell cell(dir);
+  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
+  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
+  ChildProcess gateway = cell.gateway(dir, 50);
+  ASSERT_TRUE(wait_for_episode_start(gateway, 1, 30s)) << gateway.diagnostics();
+  std::this_thread::sleep_for(200ms);
+  cell.controller.send_signal(SIGSTOP);
+  std::this_thread::sleep_for(50ms);
+  const auto interrupted = std::chrono::steady_clock::now();
+  gateway.send_signal(SIGINT);
+  const auto status = gateway.wait(5s);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - interrupted).count();
+  cell.controller.send_signal(SIGCONT);
+  ASSERT_TRUE(status) << "still running 5 s after Ctrl-C\n" << gateway.diagnostics();
+  EXPECT_TRUE(status->exited) << status->describe();
+  EXPECT_EQ(status->code, 130) << gateway.diagnostics();
+  EXPECT_LT(seconds, 1.0) << gateway.diagnostics();
+}
+
+}  // namespace
