@@ -351,25 +351,43 @@ void SimulatedArm::update_joint_command() {
   // limits); a stiff velocity loop (2 w) turns that into an acceleration. The limits then
   // scale the acceleration as one vector (integrate_joint_command).
   const double position_gain = w / 2;
-  ArmVector ik_velocity, gap;
+  // Where each joint must come to rest: the IK solution now plus the set point's travel
+  // still to come (the segment is linear, so the solution keeps its velocity until then).
+  const double remaining_s = std::max(0.0, segment_.start_s + segment_.duration_s - next_time);
+  ArmVector ik_velocity, gap, velocity;
   double correction_scale = 1;
   for (std::size_t j = 0; j < at(kJoints); ++j) {
     const auto i = static_cast<Eigen::Index>(j);
     ik_velocity(i) = (ik_q_[j] - previous_ik[j]) / dt;
     gap(i) = ik_q_[j] - command_q_[j];
     const double wanted = position_gain * std::abs(gap(i));
-    const double stoppable = std::sqrt(
-        2 * kBrakingFraction * options_.acceleration_limits_rad_per_s2[j] * std::abs(gap(i)));
+    const double stoppable = stoppable_speed(j, std::abs(gap(i)));
     if (wanted > stoppable) correction_scale = std::min(correction_scale, stoppable / wanted);
+  }
+  // The whole velocity, too, no faster than each joint can still stop at its rest point:
+  // the set point halts at the segment's end, and a reference that had followed it at
+  // full speed would overshoot the target (into the table, under a policy that dives).
+  double velocity_scale = 1;
+  for (std::size_t j = 0; j < at(kJoints); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    velocity(i) = ik_velocity(i) + correction_scale * position_gain * gap(i);
+    const double stoppable = stoppable_speed(j, std::abs(gap(i) + ik_velocity(i) * remaining_s));
+    if (std::abs(velocity(i)) > stoppable) {
+      velocity_scale = std::min(velocity_scale, stoppable / std::abs(velocity(i)));
+    }
   }
   ArmVector accel;
   for (std::size_t j = 0; j < at(kJoints); ++j) {
     const auto i = static_cast<Eigen::Index>(j);
-    const double velocity = ik_velocity(i) + correction_scale * position_gain * gap(i);
-    accel(i) = 2 * w * (velocity - command_qd_[j]);
+    accel(i) = 2 * w * (velocity_scale * velocity(i) - command_qd_[j]);
   }
   integrate_joint_command(accel);
   if (mode_ == ArmMode::kTracking && segment_.finished(next_time)) mode_ = ArmMode::kHolding;
+}
+
+double SimulatedArm::stoppable_speed(std::size_t joint, double distance_rad) const {
+  return std::sqrt(2 * kBrakingFraction * options_.acceleration_limits_rad_per_s2[joint] *
+                   distance_rad);
 }
 
 void SimulatedArm::integrate_joint_command(const ArmVector& accel) {
