@@ -383,7 +383,9 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     report.cycle_us.push_back(micros(Clock::now() - start));
     return true;
   }
+  const auto send_start = Clock::now();
   const bool go_on = send_and_take_feedback(episode, planned.base);
+  report.send_us.push_back(micros(Clock::now() - send_start));
   report.cycle_us.push_back(micros(Clock::now() - start));
   return go_on;
 }

@@ -69,6 +69,7 @@ struct EpisodeReport {
   int missed_periods = 0;                      // cycles that overran the policy period (paced only)
   std::vector<double> cycle_us;                // state -> inference -> transform -> send, per cycle
   std::vector<double> state_us, inference_us;  // the cycle's first two phases
+  std::vector<double> send_us;  // the target sent and its feedback taken (cycles that send)
 };
 
 class GatewayEpisodeRunner {

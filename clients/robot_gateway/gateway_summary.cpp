@@ -9,7 +9,7 @@
 namespace pnp::gateway {
 
 nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
-  std::vector<double> cycles, state, inference;
+  std::vector<double> cycles, state, inference, send;
   int successes = 0, missed = 0, refused = 0, controller_refused = 0, rate_limited = 0;
   int clamped = 0, held_without_target = 0;
   std::map<std::string, int> ends, arm_left, controller_refusals_by_reason;
@@ -18,6 +18,7 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
     cycles.insert(cycles.end(), e.cycle_us.begin(), e.cycle_us.end());
     state.insert(state.end(), e.state_us.begin(), e.state_us.end());
     inference.insert(inference.end(), e.inference_us.begin(), e.inference_us.end());
+    send.insert(send.end(), e.send_us.begin(), e.send_us.end());
     successes += e.success ? 1 : 0;
     missed += e.missed_periods;
     refused += e.refused;
@@ -41,7 +42,11 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
           {"cycle_p99_us", percentile(cycles, 0.99)},
           {"cycle_max_us", percentile(cycles, 1.0)},
           {"state_p50_us", percentile(state, 0.5)},
+          {"state_p99_us", percentile(state, 0.99)},
           {"inference_p50_us", percentile(inference, 0.5)},
+          {"inference_p99_us", percentile(inference, 0.99)},
+          {"send_p50_us", percentile(send, 0.5)},
+          {"send_p99_us", percentile(send, 0.99)},
           {"missed_periods", missed},
           {"refused_targets", refused},
           {"rate_limited_targets", rate_limited},
