@@ -307,9 +307,10 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
 }
 
 TEST_F(GatewayEndToEnd, InterruptEmergencyStopsTheArmAndEndsTheRun) {
-  std::atomic<bool> interrupted{true};
+  std::atomic<bool> interrupted{false};
   auto link = link_to(controller_server_->port(), interrupted);
   link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  interrupted = true;  // Ctrl-C before the first cycle (a call under way would be cancelled)
   const robot::GatewayConfig config = panda_config();
   GatewayEpisodeRunner runner(config, *link, *policy_stub_, recorder());
   const EpisodeReport report = runner.run(episode(902), interrupted);
