@@ -5,7 +5,10 @@
 
 #include <filesystem>
 #include <set>
+#include <thread>
 
+#include "arm_sim/controller_stand_in.h"
+#include "bench/faults/arm_monitor.h"
 #include "bench/faults/fault_plan.h"
 #include "bench/faults/fault_run.h"
 #include "bench/faults/fault_switch.h"
@@ -53,6 +56,41 @@ TEST(FaultSwitch, FiresOnceOnThePlannedCallOfItsSite) {
   faults.arm(std::nullopt);
   EXPECT_FALSE(faults.fired_at());
   for (int i = 0; i < 5; ++i) EXPECT_EQ(faults.fire(CallSite::kGetState), std::nullopt);
+}
+
+// The monitor sees a target the arm took in, judges it against any box, and places it
+// after a fault: what the run's verdicts rest on.
+TEST(ArmMonitor, RecordsEachTargetTakenInAndJudgesItAgainstABox) {
+  arm_sim::StandInOptions options;
+  options.clock = arm_sim::ClockMode::kLockstep;
+  arm_sim::ControllerStandIn arm(options);
+  ArmMonitor monitor(arm);
+  const auto before = ArmMonitor::Clock::now();
+  const auto lease = arm.acquire_lease("test", 5);
+  const std::uint64_t stream = arm.open_stream(lease.id);
+  const geometry::Pose start = arm.state().arm.commanded_base;
+  arm_sim::TargetRequest target;
+  target.sequence = 1;
+  target.frame_id = arm.base_frame_id();
+  target.position_m = start.position_m + Eigen::Vector3d(0, 0, -0.02);
+  target.orientation = start.orientation;
+  target.gripper_width_m = 0.04;
+  target.stamp = std::chrono::system_clock::now();
+  ASSERT_EQ(arm.take_target(lease.id, stream, target).status, arm_sim::ControllerStatus::kOk);
+  for (int i = 0; i < 200 && monitor.targets_taken() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(monitor.targets_taken(), 1);
+  EXPECT_EQ(monitor.taken_outside(options.limits.workspace), 0);
+  robot::WorkspaceBox above = options.limits.workspace;
+  above.min_m.z() = target.position_m.z() + 0.01;  // the target lies below this box
+  EXPECT_EQ(monitor.taken_outside(above), 1);
+  const auto after = monitor.after_fault(before, ArmMonitor::Clock::now());
+  EXPECT_TRUE(after.last_taken.has_value());
+  EXPECT_FALSE(
+      monitor
+          .after_fault(ArmMonitor::Clock::now(), ArmMonitor::Clock::now() + std::chrono::seconds(1))
+          .last_taken.has_value());
 }
 
 TEST(FaultRun, AMiscalibratedGatewayIsStillAValidConfigWithItsFloorLower) {

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <csignal>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -40,14 +41,15 @@ struct RobotCell {
     return db;
   }
 
-  ChildProcess gateway(const TempDir& dir, int episodes) {
-    return ChildProcess("gateway",
-                        {PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
-                         "127.0.0.1:" + std::to_string(controller.port()), "--inference",
-                         "127.0.0.1:" + std::to_string(inference.port()), "--config",
-                         PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes",
-                         std::to_string(episodes), "--seed", "1000", "--json"},
-                        dir.path());
+  void start_gateway(const TempDir& dir, int episodes, std::optional<ChildProcess>& gateway) {
+    gateway.emplace(
+        "gateway",
+        std::vector<std::string>{PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
+                                 "127.0.0.1:" + std::to_string(controller.port()), "--inference",
+                                 "127.0.0.1:" + std::to_string(inference.port()), "--config",
+                                 PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes",
+                                 std::to_string(episodes), "--seed", "1000", "--json"},
+        dir.path());
   }
 
   ChildProcess inference;
@@ -70,14 +72,22 @@ bool wait_for_episode_start(ChildProcess& gateway, int count, std::chrono::milli
   return false;
 }
 
+// Both servers up, and a gateway for `episodes` a few cycles into its first episode.
+void start_driving(RobotCell& cell, const TempDir& dir, int episodes,
+                   std::optional<ChildProcess>& gateway) {
+  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
+  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
+  cell.start_gateway(dir, episodes, gateway);
+  ASSERT_TRUE(wait_for_episode_start(*gateway, 1, 30s)) << gateway->diagnostics();
+  std::this_thread::sleep_for(200ms);
+}
+
 TEST(GatewayStall, APausedControllerEndsTheEpisodeOnTheDeadmanAndTheRunGoesOn) {
   TempDir dir("gateway_stall");
   RobotCell cell(dir);
-  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
-  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
-  ChildProcess gateway = cell.gateway(dir, 3);
-  ASSERT_TRUE(wait_for_episode_start(gateway, 1, 30s)) << gateway.diagnostics();
-  std::this_thread::sleep_for(200ms);  // a few cycles into the episode
+  std::optional<ChildProcess> driving;
+  ASSERT_NO_FATAL_FAILURE(start_driving(cell, dir, 3, driving));
+  ChildProcess& gateway = *driving;
   cell.controller.send_signal(SIGSTOP);
   std::this_thread::sleep_for(400ms);  // four dead-man times
   cell.controller.send_signal(SIGCONT);
@@ -94,11 +104,9 @@ TEST(GatewayStall, APausedControllerEndsTheEpisodeOnTheDeadmanAndTheRunGoesOn) {
 TEST(GatewayStall, CtrlCDuringAStallEndsTheGatewayAtOnce) {
   TempDir dir("gateway_stall_interrupt");
   RobotCell cell(dir);
-  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
-  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
-  ChildProcess gateway = cell.gateway(dir, 50);
-  ASSERT_TRUE(wait_for_episode_start(gateway, 1, 30s)) << gateway.diagnostics();
-  std::this_thread::sleep_for(200ms);
+  std::optional<ChildProcess> driving;
+  ASSERT_NO_FATAL_FAILURE(start_driving(cell, dir, 50, driving));
+  ChildProcess& gateway = *driving;
   cell.controller.send_signal(SIGSTOP);
   std::this_thread::sleep_for(50ms);
   const auto interrupted = std::chrono::steady_clock::now();
