@@ -53,7 +53,11 @@ int checkpoints_command(const Endpoints& endpoints, const std::string& role, std
 int plot_command(const Endpoints& endpoints, const std::string& role,
                  const std::vector<std::int64_t>& run_ids, const std::string& metric,
                  const std::string& out);
-int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id);
+// Deletes the checkpoints retention does not keep (store::RetentionPolicy) from the store
+// file at `db_path`, and gives the freed pages back to the filesystem.
+int gc_command(const std::string& db_path, int keep_last, bool json);
+// Several ids are promoted together, in one transaction (at most one per role).
+int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>& checkpoint_ids);
 
 struct PredictArgs {
   std::vector<double> observation, goal;  // given directly, or

@@ -11,6 +11,7 @@
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
+#include "store/run_store.h"
 #include "training/preset.h"
 
 namespace {
@@ -131,6 +132,20 @@ int main(int argc, char** argv) {
   checkpoints_cmd->callback(
       [&] { command = [&] { return checkpoints_command(endpoints, metrics_role, run_id, csv); }; });
 
+  std::string gc_db;
+  int gc_keep = pnp::store::RetentionPolicy{}.keep_last;
+  bool gc_json = false;
+  auto* gc_cmd = app.add_subcommand(
+      "gc",
+      "delete old checkpoints from a store file (keeps each run's last, best, promoted "
+      "and referenced ones)");
+  gc_cmd->add_option("--db", gc_db, "the SQLite store [$PNP_DB]")->envname("PNP_DB")->required();
+  gc_cmd->add_option("--keep", gc_keep, "checkpoints kept per run besides those")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  gc_cmd->add_flag("--json", gc_json, "machine-readable output");
+  gc_cmd->callback([&] { command = [&] { return gc_command(gc_db, gc_keep, gc_json); }; });
+
   std::vector<std::int64_t> plot_runs;
   std::string plot_out = "learning_curves.svg";
   auto* plot_cmd = app.add_subcommand("plot", "draw learning curves as SVG");
@@ -150,11 +165,11 @@ int main(int argc, char** argv) {
     };
   });
 
-  std::int64_t checkpoint_id = 0;
-  auto* promote_cmd = app.add_subcommand("promote", "serve a checkpoint for its role");
-  promote_cmd->add_option("CHECKPOINT", checkpoint_id, "checkpoint id")->required();
-  promote_cmd->callback(
-      [&] { command = [&] { return promote_command(endpoints, checkpoint_id); }; });
+  std::vector<std::int64_t> promote_ids;
+  auto* promote_cmd = app.add_subcommand(
+      "promote", "serve checkpoints for their roles (several: all at once, one per role)");
+  promote_cmd->add_option("CHECKPOINT", promote_ids, "checkpoint ids")->required();
+  promote_cmd->callback([&] { command = [&] { return promote_command(endpoints, promote_ids); }; });
 
   PredictArgs predict;
   auto* predict_cmd = app.add_subcommand(

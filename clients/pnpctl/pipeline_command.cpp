@@ -1,8 +1,8 @@
 // pipeline: the paper's method through the platform. The three experts are trained in
 // order, each after the learned experts before it (chained, docs/LEARNING.md) where the
 // preset says so and after scripted ones otherwise, then the
-// choreographer over them; each final checkpoint is promoted; the served hierarchy is
-// evaluated on held-out episodes through the simulation and inference services.
+// choreographer over them; the four final checkpoints are promoted together; the served hierarchy
+// is evaluated on held-out episodes through the simulation and inference services.
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -52,7 +52,7 @@ struct RoleResult {
   double wall_s = 0;  // training and its evaluations, from the run's learning curve
 };
 
-RoleResult train_and_promote(const Endpoints& endpoints, const TrainArgs& args) {
+RoleResult train(const Endpoints& endpoints, const TrainArgs& args) {
   const std::string& address = endpoints.training(args.role);
   auto stub = train::v1::TrainingService::NewStub(channel(address));
   train::v1::CreateTrainingRunResponse created;
@@ -71,7 +71,6 @@ RoleResult train_and_promote(const Endpoints& endpoints, const TrainArgs& args) 
   check(stub->GetRunMetrics(context_with_deadline().get(), metrics_request, &metrics),
         "GetRunMetrics", address);
   if (metrics.points_size() > 0) out.wall_s = metrics.points(metrics.points_size() - 1).wall_s();
-  promote_command(endpoints, out.run.latest_checkpoint_id());
   return out;
 }
 
@@ -108,13 +107,18 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
     a.role = role;
     // Chained: after the learned experts before it; else after scripted ones.
     if (training::find_preset(a.preset, "--preset").chained_experts) a.prefix = experts;
-    results.push_back(train_and_promote(endpoints, a));
+    results.push_back(train(endpoints, a));
     experts.push_back(results.back().run.latest_checkpoint_id());
   }
   TrainArgs hlc = args.choreographer;
   hlc.role = "hlc";
   hlc.experts = experts;
-  results.push_back(train_and_promote(endpoints, hlc));
+  results.push_back(train(endpoints, hlc));
+  // The four together, in one transaction: the inference service never serves new experts
+  // under an old choreographer.
+  std::vector<std::int64_t> hierarchy = experts;
+  hierarchy.push_back(results.back().run.latest_checkpoint_id());
+  promote_command(endpoints, hierarchy);
   wait_until_served(endpoints, results.back().run.latest_checkpoint_id(), args.wait_s);
   const ServiceEvaluation held_out = evaluate_through_services(
       endpoints,

@@ -13,19 +13,20 @@
 
 namespace pnp::pnpctl {
 
-int promote_command(const Endpoints& endpoints, std::int64_t checkpoint_id) {
+int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>& checkpoint_ids) {
   auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
   policy::v1::PromoteCheckpointRequest request;
-  request.set_checkpoint_id(checkpoint_id);
+  for (const std::int64_t id : checkpoint_ids) request.add_checkpoint_ids(id);
   policy::v1::PromoteCheckpointResponse response;
   check(stub->PromoteCheckpoint(context_with_deadline().get(), request, &response),
         "PromoteCheckpoint", endpoints.inference);
-  std::printf("checkpoint %lld now serves %s (run %lld, %lld training steps, %s)\n",
-              static_cast<long long>(response.checkpoint_id()), short_name(response.role()).c_str(),
-              static_cast<long long>(response.run_id()),
-              static_cast<long long>(response.env_steps()),
-              response.latest_of_run() ? "the run's latest checkpoint"
-                                       : "NOT the run's latest: an intermediate model");
+  for (const auto& p : response.promoted()) {
+    std::printf("checkpoint %lld now serves %s (run %lld, %lld training steps, %s)\n",
+                static_cast<long long>(p.checkpoint_id()), short_name(p.role()).c_str(),
+                static_cast<long long>(p.run_id()), static_cast<long long>(p.env_steps()),
+                p.latest_of_run() ? "the run's latest checkpoint"
+                                  : "NOT the run's latest: an intermediate model");
+  }
   return 0;
 }
 

@@ -18,6 +18,8 @@ std::string_view to_string(ErrorCode code) {
       return "DATA_LOSS";
     case ErrorCode::kUnavailable:
       return "UNAVAILABLE";
+    case ErrorCode::kAborted:
+      return "ABORTED";
     case ErrorCode::kCancelled:
       return "CANCELLED";
     case ErrorCode::kInternal:

@@ -16,6 +16,7 @@ enum class ErrorCode {
   kResourceExhausted,   // a size or count limit
   kDataLoss,            // corrupted or truncated stored data
   kUnavailable,         // a resource is busy or unreachable: retrying may succeed
+  kAborted,             // lost a race for shared state (another owner holds it): re-read
   kCancelled,           // the work was cancelled by its caller
   kInternal,            // a broken invariant inside the core
 };

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "store/run_store.h"
 
@@ -22,8 +23,10 @@ struct CheckpointFile {
 // Returns the new checkpoint's id. NOT_FOUND when the file cannot be read.
 std::int64_t import_checkpoint(RunStore& store, const CheckpointFile& file, bool promote);
 
-// approach.ckpt, manipulate.ckpt, retract.ckpt and hlc.ckpt from `dir`, promoted.
-void import_hierarchy(RunStore& store, const std::filesystem::path& dir, const std::string& robot,
-                      const std::string& object);
+// approach.ckpt, manipulate.ckpt, retract.ckpt and hlc.ckpt from `dir`, promoted, all in
+// one transaction: a server reading the store sees the whole hierarchy or none of it.
+// Returns the checkpoint ids in that order.
+std::vector<std::int64_t> import_hierarchy(RunStore& store, const std::filesystem::path& dir,
+                                           const std::string& robot, const std::string& object);
 
 }  // namespace pnp::store

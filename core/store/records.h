@@ -46,6 +46,10 @@ struct RunRecord {
   std::optional<double> last_score;  // the stop rule's score at the last evaluation
   bool reached = false;
   std::optional<long long> steps_to_target;
+  // The training server that holds the run (empty: none) and until when; another server
+  // of the role may take the run over once the lease has expired.
+  std::string owner;
+  std::optional<Millis> lease_expires_ms;
 };
 
 struct MetricPoint {

@@ -12,7 +12,7 @@ namespace {
 constexpr const char* kRunColumns =
     "id, role, algorithm, robot, object, seed, config_json, code_commit, parent_checkpoint_id, "
     "state, error, env_steps, last_success, reached, steps_to_target, created_ms, updated_ms, "
-    "finished_ms, gemm_path, last_score";
+    "finished_ms, gemm_path, last_score, owner, lease_expires_ms";
 
 RunRecord read_run(const Statement& st) {
   RunRecord r;
@@ -36,6 +36,8 @@ RunRecord read_run(const Statement& st) {
   if (!st.is_null(17)) r.finished_ms = st.column_int(17);
   r.spec.gemm_path = st.column_text(18);
   if (!st.is_null(19)) r.last_score = st.column_double(19);
+  r.owner = st.column_text(20);
+  if (!st.is_null(21)) r.lease_expires_ms = st.column_int(21);
   return r;
 }
 
@@ -72,7 +74,7 @@ Millis now_ms() {
       .count();
 }
 
-RunStore::RunStore(const std::string& path) : db_(path) {
+RunStore::RunStore(const std::string& path, const DatabaseOptions& options) : db_(path, options) {
   migrate(db_);
 }
 
@@ -80,11 +82,17 @@ RunRecord RunStore::create_run(const RunSpec& spec) {
   require_spec(spec);
   Transaction tx(db_);
   if (spec.parent_checkpoint_id) checkpoint_info(*spec.parent_checkpoint_id);  // NOT_FOUND
+  const std::int64_t id = insert_run(spec, RunState::kPending);
+  tx.commit();
+  return get_run(id);
+}
+
+std::int64_t RunStore::insert_run(const RunSpec& spec, RunState state) {
   const Millis now = now_ms();
   auto st = db_.prepare(
       "INSERT INTO runs (role, algorithm, robot, object, seed, config_json, code_commit, "
-      "parent_checkpoint_id, state, created_ms, updated_ms, gemm_path) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?, ?, ?)");
+      "parent_checkpoint_id, state, created_ms, updated_ms, gemm_path, finished_ms) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   st.bind(1, spec.role)
       .bind(2, spec.algorithm)
       .bind(3, spec.robot)
@@ -93,13 +101,13 @@ RunRecord RunStore::create_run(const RunSpec& spec) {
       .bind(6, spec.config_json)
       .bind(7, spec.code_commit)
       .bind_optional(8, spec.parent_checkpoint_id)
-      .bind(9, now)
+      .bind(9, run_state_name(state))
       .bind(10, now)
-      .bind(11, spec.gemm_path);
+      .bind(11, now)
+      .bind(12, spec.gemm_path)
+      .bind_optional(13, is_terminal(state) ? std::optional<std::int64_t>(now) : std::nullopt);
   st.run();
-  const std::int64_t id = db_.last_insert_id();
-  tx.commit();
-  return get_run(id);
+  return db_.last_insert_id();
 }
 
 RunRecord RunStore::get_run(std::int64_t id) {
@@ -129,7 +137,8 @@ std::vector<RunRecord> RunStore::list_runs(const RunFilter& filter) {
   return out;
 }
 
-RunRecord RunStore::set_state(std::int64_t id, RunState state, const std::string& error) {
+RunRecord RunStore::set_state(std::int64_t id, RunState state, const std::string& error,
+                              const std::string& owner) {
   Transaction tx(db_);
   const RunRecord current = get_run(id);
   if (is_terminal(current.state) && current.state != state) {
@@ -138,47 +147,115 @@ RunRecord RunStore::set_state(std::int64_t id, RunState state, const std::string
                                                     "; it cannot become " +
                                                     std::string(run_state_name(state)));
   }
+  if (state != RunState::kCancelled) require_owner(current, owner, "change its state");
   const Millis now = now_ms();
+  const bool terminal = is_terminal(state);
   auto st = db_.prepare(
-      "UPDATE runs SET state = ?, error = ?, updated_ms = ?, "
-      "finished_ms = CASE WHEN ? THEN COALESCE(finished_ms, ?) ELSE NULL END WHERE id = ?");
+      "UPDATE runs SET state = ?1, error = ?2, updated_ms = ?3, "
+      "finished_ms = CASE WHEN ?4 THEN COALESCE(finished_ms, ?3) ELSE NULL END, "
+      "owner = CASE WHEN ?4 THEN NULL ELSE owner END, "
+      "lease_expires_ms = CASE WHEN ?4 THEN NULL ELSE lease_expires_ms END WHERE id = ?5");
   st.bind(1, run_state_name(state))
       .bind(2, error)
       .bind(3, now)
-      .bind(4, static_cast<std::int64_t>(is_terminal(state)))
-      .bind(5, now)
-      .bind(6, id);
+      .bind(4, static_cast<std::int64_t>(terminal))
+      .bind(5, id);
   st.run();
   tx.commit();
   return get_run(id);
 }
 
-void RunStore::record_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
-                             std::optional<long long> steps_to_target) {
+void RunStore::require_owner(const RunRecord& run, const std::string& owner,
+                             std::string_view action) {
+  if (run.owner == owner) return;
+  throw Error(ErrorCode::kAborted,
+              "run " + std::to_string(run.id) + " is " +
+                  (run.owner.empty() ? std::string("held by no training server")
+                                     : "held by training server " + run.owner) +
+                  ", not by " + (owner.empty() ? std::string("this caller") : owner) +
+                  ": it cannot " + std::string(action));
+}
+
+namespace {
+
+// Pending, or running without a live owner (or with `?2` as its owner), at time `?3`.
+constexpr const char* kClaimable =
+    "role = ?1 AND (state = 'pending' OR (state = 'running' AND (owner IS NULL OR owner = ?2 "
+    "OR lease_expires_ms IS NULL OR lease_expires_ms < ?3)))";
+
+}  // namespace
+
+std::optional<RunRecord> RunStore::claim_next(const std::string& role, const std::string& owner,
+                                              std::chrono::milliseconds lease) {
+  if (owner.empty()) throw_invalid_argument("owner", "a training server's name", "\"\"");
   Transaction tx(db_);
-  insert_metric(run_id, p, reached, steps_to_target);
+  const Millis now = now_ms();
+  auto pick =
+      db_.prepare(std::string("SELECT id FROM runs WHERE ") + kClaimable + " ORDER BY id LIMIT 1");
+  pick.bind(1, role).bind(2, owner).bind(3, now);
+  if (!pick.step()) return std::nullopt;
+  const std::int64_t id = pick.column_int(0);
+  auto claim = db_.prepare(
+      "UPDATE runs SET state = 'running', owner = ?, lease_expires_ms = ?, updated_ms = ? "
+      "WHERE id = ?");
+  claim.bind(1, owner).bind(2, now + lease.count()).bind(3, now).bind(4, id);
+  claim.run();
+  tx.commit();
+  return get_run(id);
+}
+
+bool RunStore::renew_lease(std::int64_t run_id, const std::string& owner,
+                           std::chrono::milliseconds lease) {
+  auto st = db_.prepare(
+      "UPDATE runs SET lease_expires_ms = ? WHERE id = ? AND owner = ? AND state = 'running'");
+  st.bind(1, now_ms() + lease.count()).bind(2, run_id).bind(3, owner);
+  st.run();
+  return db_.changes() == 1;
+}
+
+void RunStore::release(std::int64_t run_id, const std::string& owner) {
+  auto st = db_.prepare(
+      "UPDATE runs SET owner = NULL, lease_expires_ms = NULL WHERE id = ? AND owner = ?");
+  st.bind(1, run_id).bind(2, owner);
+  st.run();
+}
+
+std::int64_t RunStore::count_claimable(const std::string& role, const std::string& owner) {
+  auto st = db_.prepare(std::string("SELECT COUNT(*) FROM runs WHERE ") + kClaimable);
+  st.bind(1, role).bind(2, owner).bind(3, now_ms());
+  st.step();
+  return st.column_int(0);
+}
+
+void RunStore::record_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
+                             std::optional<long long> steps_to_target, const std::string& owner) {
+  Transaction tx(db_);
+  insert_metric(run_id, p, reached, steps_to_target, owner);
   tx.commit();
 }
 
 CheckpointInfo RunStore::record_evaluation(std::int64_t run_id, const MetricPoint& point,
                                            std::span<const std::uint8_t> blob, bool reached,
-                                           std::optional<long long> steps_to_target) {
+                                           std::optional<long long> steps_to_target,
+                                           const std::string& owner) {
   if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   Transaction tx(db_);
-  insert_metric(run_id, point, reached, steps_to_target);
-  const std::int64_t id = insert_checkpoint(run_id, point.env_steps, point.task_success, blob);
+  insert_metric(run_id, point, reached, steps_to_target, owner);
+  const std::int64_t id =
+      insert_checkpoint(get_run(run_id), point.env_steps, point.task_success, blob);
   tx.commit();
   return checkpoint_info(id);
 }
 
 void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
-                             std::optional<long long> steps_to_target) {
+                             std::optional<long long> steps_to_target, const std::string& owner) {
   const RunRecord run = get_run(run_id);
   if (is_terminal(run.state)) {
     throw Error(ErrorCode::kFailedPrecondition, "run " + std::to_string(run_id) + " is " +
                                                     std::string(run_state_name(run.state)) +
                                                     ": it takes no more metrics");
   }
+  require_owner(run, owner, "take metrics");
   auto insert = db_.prepare(
       "INSERT OR REPLACE INTO metrics (run_id, env_steps, episodes, wall_s, task_success, "
       "subtask_success, sampled_success, critic_loss, actor_loss, updates, stop_score) "
@@ -209,13 +286,9 @@ void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool rea
   update.run();
 }
 
-std::vector<MetricPoint> RunStore::metrics(std::int64_t run_id) {
-  get_run(run_id);  // NOT_FOUND for an unknown run, rather than an empty curve
-  auto st = db_.prepare(
-      "SELECT env_steps, episodes, wall_s, task_success, subtask_success, sampled_success, "
-      "critic_loss, actor_loss, updates, stop_score FROM metrics WHERE run_id = ? ORDER BY "
-      "env_steps");
-  st.bind(1, run_id);
+namespace {
+
+std::vector<MetricPoint> read_metrics(Statement& st) {
   std::vector<MetricPoint> out;
   while (st.step()) {
     MetricPoint& p =
@@ -227,22 +300,45 @@ std::vector<MetricPoint> RunStore::metrics(std::int64_t run_id) {
   return out;
 }
 
+constexpr const char* kMetricColumns =
+    "SELECT env_steps, episodes, wall_s, task_success, subtask_success, sampled_success, "
+    "critic_loss, actor_loss, updates, stop_score FROM metrics ";
+
+}  // namespace
+
+std::vector<MetricPoint> RunStore::metrics(std::int64_t run_id) {
+  get_run(run_id);  // NOT_FOUND for an unknown run, rather than an empty curve
+  auto st = db_.prepare(std::string(kMetricColumns) + "WHERE run_id = ? ORDER BY env_steps");
+  st.bind(1, run_id);
+  return read_metrics(st);
+}
+
+std::vector<MetricPoint> RunStore::metrics_after(std::int64_t run_id, long long after_env_steps) {
+  get_run(run_id);
+  auto st = db_.prepare(std::string(kMetricColumns) +
+                        "WHERE run_id = ? AND env_steps > ? ORDER BY env_steps");
+  st.bind(1, run_id).bind(2, static_cast<std::int64_t>(after_env_steps));
+  return read_metrics(st);
+}
+
 CheckpointInfo RunStore::save_checkpoint(std::int64_t run_id, long long env_steps,
-                                         double eval_success, std::span<const std::uint8_t> blob) {
+                                         double eval_success, std::span<const std::uint8_t> blob,
+                                         const std::string& owner) {
   if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   Transaction tx(db_);
-  const std::int64_t id = insert_checkpoint(run_id, env_steps, eval_success, blob);
+  const RunRecord run = get_run(run_id);
+  require_owner(run, owner, "take checkpoints");
+  const std::int64_t id = insert_checkpoint(run, env_steps, eval_success, blob);
   tx.commit();
   return checkpoint_info(id);
 }
 
-std::int64_t RunStore::insert_checkpoint(std::int64_t run_id, long long env_steps,
+std::int64_t RunStore::insert_checkpoint(const RunRecord& run, long long env_steps,
                                          double eval_success, std::span<const std::uint8_t> blob) {
-  const RunRecord run = get_run(run_id);
   auto st = db_.prepare(
       "INSERT INTO checkpoints (run_id, role, env_steps, eval_success, checksum, size_bytes, "
       "blob, created_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
-  st.bind(1, run_id)
+  st.bind(1, run.id)
       .bind(2, run.spec.role)
       .bind(3, static_cast<std::int64_t>(env_steps))
       .bind(4, eval_success)
@@ -265,11 +361,15 @@ CheckpointInfo RunStore::checkpoint_info(std::int64_t checkpoint_id) {
 }
 
 Checkpoint RunStore::load_checkpoint(std::int64_t checkpoint_id) {
+  ReadTransaction snapshot(db_);  // the info and the blob of one version of the row
   Checkpoint out;
   out.info = checkpoint_info(checkpoint_id);
   auto st = db_.prepare("SELECT blob FROM checkpoints WHERE id = ?");
   st.bind(1, checkpoint_id);
-  st.step();
+  if (!st.step()) {
+    throw Error(ErrorCode::kNotFound, "checkpoint " + std::to_string(checkpoint_id) +
+                                          " not found in store " + db_.path());
+  }
   out.blob = st.column_blob(0);
   if (static_cast<std::int64_t>(out.blob.size()) != out.info.size_bytes ||
       fnv1a64_hex(out.blob) != out.info.checksum) {
@@ -281,34 +381,92 @@ Checkpoint RunStore::load_checkpoint(std::int64_t checkpoint_id) {
 }
 
 std::optional<CheckpointInfo> RunStore::latest_checkpoint(std::int64_t run_id) {
-  auto all = checkpoints(run_id);
-  if (all.empty()) return std::nullopt;
-  return all.back();
+  get_run(run_id);
+  auto st = db_.prepare(std::string("SELECT ") + kCheckpointColumns +
+                        " FROM checkpoints WHERE run_id = ? ORDER BY env_steps DESC, id DESC "
+                        "LIMIT 1");
+  st.bind(1, run_id);
+  if (!st.step()) return std::nullopt;
+  return read_checkpoint_info(st);
 }
 
 std::vector<CheckpointInfo> RunStore::checkpoints(std::int64_t run_id) {
   get_run(run_id);
   auto st = db_.prepare(std::string("SELECT ") + kCheckpointColumns +
-                        " FROM checkpoints WHERE run_id = ? ORDER BY id");
+                        " FROM checkpoints WHERE run_id = ? ORDER BY env_steps, id");
   st.bind(1, run_id);
   std::vector<CheckpointInfo> out;
   while (st.step()) out.push_back(read_checkpoint_info(st));
   return out;
 }
 
-Promotion RunStore::promote(std::int64_t checkpoint_id) {
-  load_checkpoint(checkpoint_id);  // never promote what could not be served
+std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun> runs,
+                                                    bool promote) {
+  for (const FinishedRun& run : runs) {
+    require_spec(run.spec);
+    if (run.blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
+  }
   Transaction tx(db_);
-  const CheckpointInfo info = checkpoint_info(checkpoint_id);
+  std::vector<std::int64_t> ids;
+  std::vector<CheckpointInfo> infos;
+  for (const FinishedRun& run : runs) {
+    if (run.spec.parent_checkpoint_id) checkpoint_info(*run.spec.parent_checkpoint_id);
+    // Finished at once, in the transaction that stores its checkpoint: no training server
+    // ever sees it pending, so none takes it for an interrupted run to resume.
+    const std::int64_t run_id = insert_run(run.spec, RunState::kSucceeded);
+    ids.push_back(insert_checkpoint(get_run(run_id), 0, 0.0, run.blob));
+    infos.push_back(checkpoint_info(ids.back()));
+  }
+  if (promote) {
+    const Millis now = now_ms();
+    for (std::size_t i = 0; i < infos.size(); ++i) {
+      for (std::size_t j = 0; j < i; ++j)
+        if (infos[j].role == infos[i].role)
+          throw_invalid_argument("runs", "at most one checkpoint per role to promote",
+                                 "two of role " + infos[i].role);
+      upsert_promotion(infos[i], now);
+    }
+  }
+  tx.commit();
+  return ids;
+}
+
+void RunStore::upsert_promotion(const CheckpointInfo& info, Millis now) {
   auto st = db_.prepare(
       "INSERT INTO promotions (role, checkpoint_id, promoted_ms) VALUES (?, ?, ?) "
       "ON CONFLICT (role) DO UPDATE SET checkpoint_id = excluded.checkpoint_id, "
       "promoted_ms = excluded.promoted_ms");
-  const Millis now = now_ms();
-  st.bind(1, info.role).bind(2, checkpoint_id).bind(3, now);
+  st.bind(1, info.role).bind(2, info.id).bind(3, now);
   st.run();
+}
+
+std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoint_ids) {
+  if (checkpoint_ids.empty())
+    throw_invalid_argument("checkpoint_ids", "at least one checkpoint id", "none");
+  std::vector<CheckpointInfo> infos;
+  for (const std::int64_t id : checkpoint_ids) {
+    const CheckpointInfo info = load_checkpoint(id).info;  // never promote what cannot be served
+    for (const CheckpointInfo& earlier : infos)
+      if (earlier.role == info.role)
+        throw_invalid_argument("checkpoint_ids", "at most one checkpoint per role",
+                               "checkpoints " + std::to_string(earlier.id) + " and " +
+                                   std::to_string(id) + ", both " + info.role);
+    infos.push_back(info);
+  }
+  Transaction tx(db_);
+  const Millis now = now_ms();
+  std::vector<Promotion> out;
+  for (const CheckpointInfo& info : infos) {
+    checkpoint_info(info.id);  // NOT_FOUND if deleted since it was verified
+    upsert_promotion(info, now);
+    out.push_back({info.role, info.id, now});
+  }
   tx.commit();
-  return {info.role, checkpoint_id, now};
+  return out;
+}
+
+Promotion RunStore::promote(std::int64_t checkpoint_id) {
+  return promote(std::span<const std::int64_t>(&checkpoint_id, 1)).front();
 }
 
 std::optional<Promotion> RunStore::promoted(const std::string& role) {
@@ -326,6 +484,72 @@ std::vector<Promotion> RunStore::promotions() {
   std::vector<Promotion> out;
   while (st.step()) out.push_back({st.column_text(0), st.column_int(1), st.column_int(2)});
   return out;
+}
+
+namespace {
+
+// The checkpoints retention keeps (the run's last ?1 by steps, its best, the promoted
+// ones, and those another run starts from: its parent, or experts it sequences or runs
+// after, recorded in its config).
+constexpr const char* kKeptCheckpoints = R"sql(
+SELECT id FROM (SELECT id, ROW_NUMBER() OVER (PARTITION BY run_id
+                ORDER BY env_steps DESC, id DESC) AS rank FROM checkpoints) WHERE rank <= ?1
+UNION SELECT id FROM (SELECT id, ROW_NUMBER() OVER (PARTITION BY run_id
+                ORDER BY eval_success DESC, env_steps DESC, id DESC) AS rank FROM checkpoints)
+      WHERE rank = 1
+UNION SELECT checkpoint_id FROM promotions
+UNION SELECT parent_checkpoint_id FROM runs WHERE parent_checkpoint_id IS NOT NULL
+UNION SELECT CAST(e.value AS INTEGER)
+      FROM (SELECT config_json FROM runs WHERE json_valid(config_json)) AS r,
+           json_each(r.config_json, '$.checkpoints.experts') AS e
+)sql";
+
+}  // namespace
+
+GcReport RunStore::prune_where(std::string_view run_condition, std::optional<std::int64_t> run_id,
+                               const RetentionPolicy& policy) {
+  if (policy.keep_last < 1)
+    throw_invalid_argument("keep_last", "at least 1 checkpoint per run",
+                           std::to_string(policy.keep_last));
+  GcReport report;
+  Transaction tx(db_);
+  auto doomed =
+      db_.prepare("SELECT id, size_bytes FROM checkpoints WHERE " + std::string(run_condition) +
+                  " AND id NOT IN (" + kKeptCheckpoints + ")");
+  doomed.bind(1, static_cast<std::int64_t>(policy.keep_last));
+  if (run_id) doomed.bind(2, *run_id);
+  std::vector<std::int64_t> ids;
+  while (doomed.step()) {
+    ids.push_back(doomed.column_int(0));
+    report.bytes_deleted += doomed.column_int(1);
+  }
+  auto erase = db_.prepare("DELETE FROM checkpoints WHERE id = ?");
+  for (const std::int64_t id : ids) {
+    erase.reset();
+    erase.bind(1, id);
+    erase.run();
+  }
+  tx.commit();
+  report.checkpoints_deleted = static_cast<std::int64_t>(ids.size());
+  return report;
+}
+
+GcReport RunStore::prune_checkpoints(std::int64_t run_id, const RetentionPolicy& policy) {
+  get_run(run_id);
+  return prune_where("run_id = ?2", run_id, policy);
+}
+
+GcReport RunStore::collect_garbage(const RetentionPolicy& policy) {
+  GcReport report = prune_where("1", std::nullopt, policy);
+  // Free pages go back to the filesystem only on a file created with incremental
+  // auto-vacuum (every file this build creates); older files reuse them for new rows.
+  if (db_.pragma_int("auto_vacuum") == 2) {
+    const std::int64_t before = db_.pragma_int("freelist_count");
+    db_.execute("PRAGMA incremental_vacuum");
+    report.pages_freed = before - db_.pragma_int("freelist_count");
+  }
+  db_.execute("PRAGMA wal_checkpoint(TRUNCATE)");
+  return report;
 }
 
 }  // namespace pnp::store

@@ -10,7 +10,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 3> kMigrations{
+constexpr std::array<std::string_view, 4> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -78,6 +78,65 @@ ALTER TABLE runs ADD COLUMN gemm_path TEXT NOT NULL DEFAULT '';
 ALTER TABLE metrics ADD COLUMN stop_score REAL;
 ALTER TABLE runs ADD COLUMN last_score REAL;
 )sql",
+    // 4: run ownership (a training server claims a run with a lease it renews; another
+    // server of the role takes it over only once the lease has expired), and ids that are
+    // never reused (AUTOINCREMENT: a deleted run's or checkpoint's id never names another
+    // one). SQLite adds AUTOINCREMENT only to a new table, so both are rebuilt; the store
+    // turns foreign keys off around migrations for it (store/schema.cpp).
+    R"sql(
+CREATE TABLE runs_v4 (
+  id INTEGER PRIMARY KEY AUTOINCREMENT,
+  role TEXT NOT NULL CHECK (role IN ('approach', 'manipulate', 'retract', 'hlc', 'e2e')),
+  algorithm TEXT NOT NULL,
+  robot TEXT NOT NULL,
+  object TEXT NOT NULL,
+  seed INTEGER NOT NULL,
+  config_json TEXT NOT NULL,
+  code_commit TEXT NOT NULL,
+  parent_checkpoint_id INTEGER REFERENCES checkpoints(id),
+  state TEXT NOT NULL
+    CHECK (state IN ('pending', 'running', 'succeeded', 'failed', 'cancelled')),
+  error TEXT NOT NULL DEFAULT '',
+  env_steps INTEGER NOT NULL DEFAULT 0,
+  last_success REAL NOT NULL DEFAULT 0,
+  reached INTEGER NOT NULL DEFAULT 0,
+  steps_to_target INTEGER,
+  created_ms INTEGER NOT NULL,
+  updated_ms INTEGER NOT NULL,
+  finished_ms INTEGER,
+  gemm_path TEXT NOT NULL DEFAULT '',
+  last_score REAL,
+  owner TEXT,
+  lease_expires_ms INTEGER
+);
+INSERT INTO runs_v4 (id, role, algorithm, robot, object, seed, config_json, code_commit,
+  parent_checkpoint_id, state, error, env_steps, last_success, reached, steps_to_target,
+  created_ms, updated_ms, finished_ms, gemm_path, last_score)
+SELECT id, role, algorithm, robot, object, seed, config_json, code_commit,
+  parent_checkpoint_id, state, error, env_steps, last_success, reached, steps_to_target,
+  created_ms, updated_ms, finished_ms, gemm_path, last_score FROM runs;
+DROP TABLE runs;
+ALTER TABLE runs_v4 RENAME TO runs;
+CREATE INDEX runs_by_role ON runs (role, id);
+CREATE INDEX runs_by_state ON runs (role, state, id);
+
+CREATE TABLE checkpoints_v4 (
+  id INTEGER PRIMARY KEY AUTOINCREMENT,
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  role TEXT NOT NULL,
+  env_steps INTEGER NOT NULL,
+  eval_success REAL NOT NULL,
+  checksum TEXT NOT NULL,
+  size_bytes INTEGER NOT NULL,
+  blob BLOB NOT NULL,
+  created_ms INTEGER NOT NULL
+);
+INSERT INTO checkpoints_v4 SELECT id, run_id, role, env_steps, eval_success, checksum,
+  size_bytes, blob, created_ms FROM checkpoints;
+DROP TABLE checkpoints;
+ALTER TABLE checkpoints_v4 RENAME TO checkpoints;
+CREATE INDEX checkpoints_by_run ON checkpoints (run_id, env_steps, id);
+)sql",
 };
 
 int user_version(Database& db) {
@@ -92,20 +151,70 @@ int schema_version() {
   return static_cast<int>(kMigrations.size());
 }
 
+namespace {
+
+[[noreturn]] void refuse_newer(Database& db, int current) {
+  throw Error(ErrorCode::kFailedPrecondition,
+              "database " + db.path() + " has schema version " + std::to_string(current) +
+                  ", newer than this build's " + std::to_string(schema_version()) +
+                  ": use a newer build");
+}
+
+// Foreign keys off while migrations rebuild tables (dropping a table with them on would
+// cascade-delete the rows that reference it); the setting is a no-op inside a transaction,
+// hence around it.
+class ForeignKeysOff {
+ public:
+  explicit ForeignKeysOff(Database& db) : db_(db) { db_.execute("PRAGMA foreign_keys = OFF"); }
+  ~ForeignKeysOff() {
+    try {
+      db_.execute("PRAGMA foreign_keys = ON");
+    } catch (...) {  // the connection is unusable then; its next statement says so
+    }
+  }
+  ForeignKeysOff(const ForeignKeysOff&) = delete;
+  ForeignKeysOff& operator=(const ForeignKeysOff&) = delete;
+
+ private:
+  Database& db_;
+};
+
+}  // namespace
+
 void migrate(Database& db) {
-  // The version is read under the write lock: processes opening a new file together (the
-  // platform starts its services at once) must not both run the same migration.
+  migrate_to(db, schema_version());
+}
+
+void migrate_to(Database& db, int target) {
+  if (target < 0 || target > schema_version())
+    throw_invalid_argument("schema version", "0 to " + std::to_string(schema_version()),
+                           std::to_string(target));
+  // Read without a lock first: a current database is opened without ever taking the write
+  // lock, so a server starts while another process is writing.
+  const int seen = user_version(db);
+  if (seen > schema_version()) refuse_newer(db, seen);
+  if (seen >= target) return;
+  if (db.access() == Access::kReadOnly) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "database " + db.path() + " has schema version " + std::to_string(seen) +
+                    ", older than this build's " + std::to_string(schema_version()) +
+                    ": open it once read-write (any training server) to migrate it");
+  }
+  ForeignKeysOff keys_off(db);
+  // The version is re-read under the write lock: processes opening a new file together
+  // (the platform starts its services at once) must not both run the same migration.
   Transaction tx(db);
   const int current = user_version(db);
-  if (current > schema_version()) {
-    throw Error(ErrorCode::kFailedPrecondition,
-                "database " + db.path() + " has schema version " + std::to_string(current) +
-                    ", newer than this build's " + std::to_string(schema_version()) +
-                    ": use a newer build");
-  }
-  for (int v = current; v < schema_version(); ++v) {
+  if (current > schema_version()) refuse_newer(db, current);
+  for (int v = current; v < target; ++v) {
     db.execute(kMigrations[static_cast<std::size_t>(v)]);
     db.execute("PRAGMA user_version = " + std::to_string(v + 1));
+  }
+  auto violations = db.prepare("PRAGMA foreign_key_check");
+  if (violations.step()) {
+    throw Error(ErrorCode::kDataLoss, "database " + db.path() + ": table " +
+                                          violations.column_text(0) +
+                                          " has rows whose references are missing");
   }
   tx.commit();
 }

@@ -1,6 +1,7 @@
 #include "store/sqlite.h"
 
 #include <chrono>
+#include <filesystem>
 #include <thread>
 
 #include "common/error.h"
@@ -8,59 +9,108 @@
 namespace pnp::store {
 namespace {
 
-// SQLITE_BUSY / LOCKED are retryable (another process holds the write lock past the busy
-// timeout); everything else is a broken invariant or a damaged file.
+std::string file_of(sqlite3* db) {
+  const char* name = db ? sqlite3_db_filename(db, "main") : nullptr;
+  return name && *name ? name : ":memory:";
+}
+
+// What went wrong, in the terms a caller acts on: BUSY and LOCKED are retryable (another
+// connection holds the lock past the busy timeout); a full disk is RESOURCE_EXHAUSTED and a
+// read-only file FAILED_PRECONDITION (retrying will not help, an operator must); a damaged
+// file is DATA_LOSS. Every message names the file.
 [[noreturn]] void fail(sqlite3* db, int code, std::string_view what) {
-  const std::string message =
-      std::string(what) + ": " + (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
-  const int primary = code & 0xff;
-  if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED)
-    throw Error(ErrorCode::kUnavailable, message);
-  if (primary == SQLITE_CORRUPT || primary == SQLITE_NOTADB)
-    throw Error(ErrorCode::kDataLoss, message);
-  if (primary == SQLITE_CONSTRAINT) throw Error(ErrorCode::kFailedPrecondition, message);
-  if (primary == SQLITE_CANTOPEN || primary == SQLITE_IOERR || primary == SQLITE_FULL ||
-      primary == SQLITE_READONLY)
-    throw Error(ErrorCode::kUnavailable, message);
-  throw Error(ErrorCode::kInternal, message);
+  const std::string message = "store " + file_of(db) + ": " + std::string(what) + ": " +
+                              (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
+  switch (code & 0xff) {
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      throw BusyError(message);
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      throw Error(ErrorCode::kDataLoss, message);
+    case SQLITE_CONSTRAINT:
+      throw Error(ErrorCode::kFailedPrecondition, message);
+    case SQLITE_FULL:
+      throw Error(ErrorCode::kResourceExhausted, message + " (the disk is full)");
+    case SQLITE_READONLY:
+      throw Error(ErrorCode::kFailedPrecondition, message + " (the file is read-only)");
+    case SQLITE_CANTOPEN:
+      throw Error(ErrorCode::kFailedPrecondition, message);
+    case SQLITE_IOERR:
+      throw Error(ErrorCode::kUnavailable, message);
+    default:
+      throw Error(ErrorCode::kInternal, message);
+  }
+}
+
+std::string first_text(sqlite3* db, const std::string& sql) {
+  Statement st(db, sql);
+  return st.step() ? st.column_text(0) : std::string();
 }
 
 // Switching a new file to WAL needs an exclusive lock, and SQLite does not call the busy
 // handler for it while another connection is creating the same file: the pragma then
-// fails at once with BUSY. Retried here for as long as the busy timeout would wait.
+// fails at once with BUSY. Retried here for as long as the busy timeout would wait. The
+// answer is checked: a filesystem without shared memory keeps the old journal mode, and
+// the store would then silently lose WAL's concurrent reads.
 void enable_wal(sqlite3* db, std::chrono::milliseconds patience) {
   const auto deadline = std::chrono::steady_clock::now() + patience;
   for (;;) {
-    const int rc = sqlite3_exec(db, "PRAGMA journal_mode = WAL", nullptr, nullptr, nullptr);
-    if (rc == SQLITE_OK) return;
-    const int primary = rc & 0xff;
-    if ((primary != SQLITE_BUSY && primary != SQLITE_LOCKED) ||
-        std::chrono::steady_clock::now() >= deadline) {
-      fail(db, rc, "setting journal_mode = WAL");
+    try {
+      const std::string mode = first_text(db, "PRAGMA journal_mode = WAL");
+      if (mode == "wal") return;
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "store " + file_of(db) + ": journal_mode is \"" + mode +
+                      "\" where \"wal\" is needed: put the database on a local filesystem");
+    } catch (const BusyError&) {
+      if (std::chrono::steady_clock::now() >= deadline) throw;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
 }
 
+// The WAL file is cut back to this size after a checkpoint (it otherwise keeps its
+// largest size); 1.1 MB checkpoints make it grow past SQLite's 4 MB autocheckpoint.
+constexpr int kJournalSizeLimitBytes = 16 << 20;
+
 }  // namespace
 
-Database::Database(const std::string& path, std::chrono::milliseconds busy_timeout) : path_(path) {
-  sqlite3* raw = nullptr;
-  const int rc =
-      sqlite3_open_v2(path.c_str(), &raw,
-                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr);
-  db_.reset(raw);  // closed even when opening failed
-  if (rc != SQLITE_OK) fail(raw, rc, "opening database " + path);
-  sqlite3_extended_result_codes(raw, 1);
-  sqlite3_busy_timeout(raw, static_cast<int>(busy_timeout.count()));
-  execute("PRAGMA foreign_keys = ON");
-  if (path != ":memory:") {
-    // WAL: readers never block the writer (the training services write metrics while
-    // the inference service and clients read). NORMAL sync is durable across process
-    // crashes in WAL mode, which is what a killed service needs.
-    enable_wal(raw, busy_timeout);
-    execute("PRAGMA synchronous = NORMAL");
+Database::Database(const std::string& path, const DatabaseOptions& options)
+    : path_(path), access_(options.access) {
+  if (path.empty()) throw_invalid_argument("db path", "a file name or :memory:", "an empty path");
+  const bool read_only = options.access == Access::kReadOnly;
+  if (read_only && path != ":memory:" && !std::filesystem::exists(path)) {
+    throw Error(ErrorCode::kNotFound, "store " + path + ": no such database (opened read-only)");
   }
+  sqlite3* raw = nullptr;
+  const int flags =
+      (read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) |
+      SQLITE_OPEN_NOMUTEX;
+  const int rc = sqlite3_open_v2(path.c_str(), &raw, flags,
+                                 options.vfs.empty() ? nullptr : options.vfs.c_str());
+  db_.reset(raw);  // closed even when opening failed
+  if (rc != SQLITE_OK) fail(raw, rc, "opening the database");
+  sqlite3_extended_result_codes(raw, 1);
+  sqlite3_busy_timeout(raw, static_cast<int>(options.busy_timeout.count()));
+  execute("PRAGMA foreign_keys = ON");
+  if (read_only) {
+    execute("PRAGMA query_only = ON");
+    return;
+  }
+  if (path == ":memory:") return;
+  // On a new file only (an existing one keeps its mode, and setting it would wait for the
+  // write lock): freed pages can then be given back to the filesystem a few at a time
+  // (pnpctl gc) instead of by a full VACUUM.
+  if (pragma_int("page_count") == 0) execute("PRAGMA auto_vacuum = INCREMENTAL");
+  // WAL: readers never block the writer (the training services write metrics while the
+  // inference service and clients read). A file already in WAL mode is left as it is.
+  if (first_text(raw, "PRAGMA journal_mode") != "wal") enable_wal(raw, options.busy_timeout);
+  // FULL: in WAL mode, NORMAL keeps commits across a process crash but a power loss rolls
+  // back every commit since the last checkpoint, acknowledged promotions and final states
+  // included. What FULL costs per evaluation is in docs/BENCHMARKS.md (pnp-bench-store).
+  execute(options.sync == Sync::kFull ? "PRAGMA synchronous = FULL"
+                                      : "PRAGMA synchronous = NORMAL");
+  execute("PRAGMA journal_size_limit = " + std::to_string(kJournalSizeLimitBytes));
 }
 
 void Database::execute(std::string_view sql) {
@@ -76,6 +126,11 @@ void Database::execute(std::string_view sql) {
 
 Statement Database::prepare(std::string_view sql) {
   return Statement(db_.get(), sql);
+}
+
+std::int64_t Database::pragma_int(std::string_view pragma) {
+  auto st = prepare("PRAGMA " + std::string(pragma));
+  return st.step() ? st.column_int(0) : 0;
 }
 
 std::int64_t Database::last_insert_id() const {
@@ -182,6 +237,23 @@ Transaction::~Transaction() {
 void Transaction::commit() {
   db_.execute("COMMIT");
   done_ = true;
+}
+
+}  // namespace pnp::store
+
+namespace pnp::store {
+
+ReadTransaction::ReadTransaction(Database& db)
+    : db_(db), owns_(sqlite3_get_autocommit(db.handle()) != 0) {
+  if (owns_) db_.execute("BEGIN");  // inside a transaction already: that one is the snapshot
+}
+
+ReadTransaction::~ReadTransaction() {
+  if (!owns_) return;
+  try {
+    db_.execute("COMMIT");  // a read-only transaction: ends the snapshot, writes nothing
+  } catch (...) {           // nothing more can be done from a destructor
+  }
 }
 
 }  // namespace pnp::store

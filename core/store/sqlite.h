@@ -1,7 +1,8 @@
 #pragma once
 // A thin RAII layer over SQLite: a connection configured the way the store needs it (WAL
-// journal, busy timeout, foreign keys), prepared statements, and transactions that roll
-// back unless committed. A connection belongs to one thread at a time.
+// journal confirmed, synchronous FULL, busy timeout, foreign keys), prepared statements,
+// and transactions that roll back unless committed. A connection belongs to one thread at
+// a time.
 
 #include <sqlite3.h>
 
@@ -14,23 +15,54 @@
 #include <string_view>
 #include <vector>
 
+#include "common/error.h"
+
 namespace pnp::store {
 
 class Statement;
 
+// SQLITE_BUSY / SQLITE_LOCKED after the busy timeout: another connection holds the lock.
+// UNAVAILABLE, and retryable (store/retry.h): nothing was written.
+class BusyError : public Error {
+ public:
+  explicit BusyError(const std::string& message) : Error(ErrorCode::kUnavailable, message) {}
+};
+
+enum class Access {
+  kReadWrite,  // creates the file if needed and sets it up (WAL)
+  kReadOnly,   // never writes: for readers, and for files they may not write
+};
+
+// kFull: a commit is on disk when it is acknowledged, so a power loss keeps it. kNormal
+// keeps commits across a process crash only; it exists so that pnp-bench-store can
+// measure what kFull costs.
+enum class Sync { kFull, kNormal };
+
+struct DatabaseOptions {
+  Access access = Access::kReadWrite;
+  Sync sync = Sync::kFull;
+  std::chrono::milliseconds busy_timeout = std::chrono::seconds(5);
+  // A registered SQLite VFS by name (empty: the default). Tests use one that models a
+  // power loss (tests/core/store/power_loss_vfs.h).
+  std::string vfs{};
+};
+
 class Database {
  public:
-  // Opens (creating if needed) the file at `path`; ":memory:" for a private in-memory
-  // database. Throws UNAVAILABLE (ErrorCode::kUnavailable) if it cannot be opened.
-  explicit Database(const std::string& path,
-                    std::chrono::milliseconds busy_timeout = std::chrono::seconds(5));
+  // Opens the file at `path`; ":memory:" for a private in-memory database. Errors name
+  // the path: a missing file opened read-only is NOT_FOUND, a directory that refuses the
+  // file FAILED_PRECONDITION, a file that is not a database DATA_LOSS, a file that cannot
+  // hold a WAL journal FAILED_PRECONDITION.
+  explicit Database(const std::string& path, const DatabaseOptions& options = {});
 
   void execute(std::string_view sql);  // one or more statements, no results
   Statement prepare(std::string_view sql);
+  std::int64_t pragma_int(std::string_view pragma);  // PRAGMA <pragma>, first column
   std::int64_t last_insert_id() const;
   int changes() const;
   sqlite3* handle() const { return db_.get(); }
   const std::string& path() const { return path_; }
+  Access access() const { return access_; }
 
  private:
   struct Close {
@@ -38,6 +70,7 @@ class Database {
   };
   std::unique_ptr<sqlite3, Close> db_;
   std::string path_;
+  Access access_;
 };
 
 class Statement {
@@ -86,6 +119,21 @@ class Transaction {
  private:
   Database& db_;
   bool done_ = false;
+};
+
+// BEGIN (deferred): several reads see one snapshot of the database, whatever commits
+// meanwhile. Takes no write lock; ends on destruction. Inside another transaction it does
+// nothing (that transaction is already one snapshot).
+class ReadTransaction {
+ public:
+  explicit ReadTransaction(Database& db);
+  ~ReadTransaction();
+  ReadTransaction(const ReadTransaction&) = delete;
+  ReadTransaction& operator=(const ReadTransaction&) = delete;
+
+ private:
+  Database& db_;
+  bool owns_;
 };
 
 }  // namespace pnp::store

@@ -1,7 +1,11 @@
 #include "training/run_manager.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <functional>
+#include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
@@ -86,25 +90,38 @@ void check_parent_shape(const TrainingSpec& spec, const store::Checkpoint& paren
   }
 }
 
+std::string default_owner() {
+  std::array<char, 256> host{};
+  if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
+  return std::string(host.data()) + ":" + std::to_string(::getpid()) + ":" +
+         std::to_string(store::now_ms());
+}
+
+RunManagerOptions completed(RunManagerOptions options) {
+  if (options.owner.empty()) options.owner = default_owner();
+  if (options.lease < std::chrono::milliseconds(100))
+    throw_invalid_argument("lease", "at least 100 ms",
+                           std::to_string(options.lease.count()) + " ms");
+  if (!options.log) options.log = [](const std::string& line) { std::cerr << line << std::endl; };
+  return options;
+}
+
 }  // namespace
 
 RunManager::RunManager(const RunManagerOptions& options)
-    : options_(options), handler_store_(options.db_path) {
+    : options_(completed(options)), handler_store_(options.db_path) {
   if (!store::is_known_role(options_.role))
     throw_invalid_argument("role", "one of approach, manipulate, retract, hlc, e2e",
                            "\"" + options_.role + "\"");
-  for (store::RunState state : {store::RunState::kRunning, store::RunState::kPending}) {
-    store::RunFilter filter;
-    filter.role = options_.role;
-    filter.state = state;
-    filter.limit = 1000;
-    for (const auto& run : handler_store_.list_runs(filter)) queue_.push_back(run.id);
-  }
-  std::sort(queue_.begin(), queue_.end());  // oldest first
+  options_.retry.jitter_seed = std::hash<std::string>{}(options_.owner);
   worker_ = std::jthread([this](std::stop_token shutdown) { work(shutdown); });
+  heartbeat_ = std::jthread([this](std::stop_token shutdown) { heartbeat(shutdown); });
 }
 
-RunManager::~RunManager() = default;  // worker_ requests stop and joins first
+RunManager::~RunManager() {
+  heartbeat_.request_stop();
+  worker_.request_stop();
+}  // then the threads are joined (declared last), before the members they use go
 
 store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRefs& given) {
   if (spec.role != options_.role) {
@@ -158,10 +175,10 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
                         std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   const store::RunRecord run = handler_store_.create_run(record);
   {
-    std::lock_guard queue_lock(mutex_);
-    queue_.push_back(run.id);
+    std::lock_guard wake_lock(mutex_);
+    woken_ = true;
   }
-  queue_cv_.notify_all();
+  wake_cv_.notify_all();
   changed();
   return run;
 }
@@ -180,14 +197,15 @@ store::RunRecord RunManager::cancel(std::int64_t run_id) {
                     std::string(store::run_state_name(run.state)) + ")");
   }
   {
-    std::lock_guard queue_lock(mutex_);
+    std::lock_guard lock_active(mutex_);
     if (active_ && active_->run_id == run_id) {
       active_->cancel_requested = true;
       active_->stop.request_stop();
       return run;  // the worker records CANCELLED when the trainer returns
     }
-    std::erase(queue_, run_id);
   }
+  // Pending, or held by another manager of the role: that one stops it at its next
+  // heartbeat, when renewing the lease finds the run cancelled.
   const store::RunRecord cancelled = handler_store_.set_state(run_id, store::RunState::kCancelled);
   changed();
   return cancelled;
@@ -209,6 +227,12 @@ std::vector<store::MetricPoint> RunManager::metrics(std::int64_t run_id) {
   return handler_store_.metrics(run_id);
 }
 
+std::vector<store::MetricPoint> RunManager::metrics_after(std::int64_t run_id,
+                                                          long long after_env_steps) {
+  std::lock_guard lock(handler_mutex_);
+  return handler_store_.metrics_after(run_id, after_env_steps);
+}
+
 std::vector<store::CheckpointInfo> RunManager::checkpoints(std::int64_t run_id) {
   std::lock_guard lock(handler_mutex_);
   handler_store_.get_run(run_id);  // NOT_FOUND for an unknown run
@@ -227,7 +251,7 @@ std::optional<double> RunManager::eta_s(std::int64_t run_id) const {
 RunManager::Load RunManager::load() const {
   std::lock_guard lock(mutex_);
   Load load;
-  load.queued = queue_.size();
+  load.queued = queued_;
   if (!active_) return load;
   load.active = active_->run_id;
   load.active_env_steps = active_->steps;
@@ -257,35 +281,135 @@ void RunManager::changed() {
   change_cv_.notify_all();
 }
 
+void RunManager::report(const std::string& message) const {
+  options_.log("training worker (" + options_.role + ", " + options_.owner + "): " + message);
+}
+
+void RunManager::sleep_until_woken(std::chrono::milliseconds timeout,
+                                   const std::stop_token& shutdown) {
+  std::unique_lock lock(mutex_);
+  wake_cv_.wait_for(lock, shutdown, timeout, [&] { return woken_; });
+  woken_ = false;
+}
+
 void RunManager::work(std::stop_token shutdown) {
-  store::RunStore store(options_.db_path);  // the worker's own connection
-  for (;;) {
-    std::int64_t run_id = 0;
+  // The worker's own connection, opened here and reopened after a failure: nothing that
+  // goes wrong in this thread may end the process (an escaping exception would call
+  // std::terminate with no word of why).
+  std::optional<store::RunStore> store;
+  int failures = 0;
+  const auto poll = options_.lease / 4;
+  while (!shutdown.stop_requested()) {
+    std::optional<store::RunRecord> claimed;
+    try {
+      if (!store) store.emplace(options_.db_path);
+      claimed = store::with_retry(
+          options_.retry,
+          [&] { return store->claim_next(options_.role, options_.owner, options_.lease); },
+          shutdown);
+      const auto waiting = store->count_claimable(options_.role, options_.owner);
+      std::lock_guard lock(mutex_);
+      queued_ = static_cast<std::size_t>(std::max<std::int64_t>(0, waiting - (claimed ? 1 : 0)));
+      failures = 0;
+    } catch (const std::exception& e) {
+      if (shutdown.stop_requested()) return;
+      report(std::string("looking for runs: ") + e.what() + "; trying again");
+      if (!dynamic_cast<const store::BusyError*>(&e)) store.reset();
+      store::sleep_unless_stopped(store::retry_backoff(options_.retry, failures++), shutdown);
+      continue;
+    }
+    if (!claimed) {
+      sleep_until_woken(poll, shutdown);
+      continue;
+    }
     std::stop_token run_stop;
     {
-      std::unique_lock lock(mutex_);
-      if (!queue_cv_.wait(lock, shutdown, [&] { return !queue_.empty(); })) return;
-      run_id = queue_.front();
-      queue_.pop_front();
+      std::lock_guard lock(mutex_);
       active_.emplace();
-      active_->run_id = run_id;
+      active_->run_id = claimed->id;
       run_stop = active_->stop.get_token();
     }
-    train(store, run_id, run_stop, shutdown);
+    changed();
+    const Turn turn = train(*store, *claimed, run_stop, shutdown);
     {
       std::lock_guard lock(mutex_);
       active_.reset();
     }
+    if (turn == Turn::kReleased) {
+      try {  // best effort: if this fails, the lease expires and another manager resumes it
+        store->release(claimed->id, options_.owner);
+      } catch (const std::exception& e) {
+        report("run " + std::to_string(claimed->id) + ": releasing it: " + e.what());
+      }
+    }
     changed();
-    if (shutdown.stop_requested()) return;
+    if (turn == Turn::kRequeued) sleep_until_woken(poll, shutdown);
   }
 }
 
-void RunManager::train(store::RunStore& store, std::int64_t run_id, std::stop_token run_stop,
-                       const std::stop_token& shutdown) {
+void RunManager::heartbeat(std::stop_token shutdown) {
+  std::optional<store::RunStore> store;
+  while (store::sleep_unless_stopped(options_.lease / 4, shutdown)) {
+    std::int64_t run_id = 0;
+    {
+      std::lock_guard lock(mutex_);
+      if (!active_ || active_->lost) continue;
+      run_id = active_->run_id;
+    }
+    try {
+      if (!store) store.emplace(options_.db_path);
+      if (store->renew_lease(run_id, options_.owner, options_.lease)) continue;
+      bool stopped = false;
+      {
+        std::lock_guard lock(mutex_);
+        if (active_ && active_->run_id == run_id && !active_->cancel_requested) {
+          active_->lost = true;
+          active_->stop.request_stop();
+          stopped = true;
+        }
+      }
+      if (stopped) {
+        report("run " + std::to_string(run_id) +
+               " is no longer held by this server (cancelled, or taken over after its lease "
+               "expired): stopping its trainer");
+      }
+    } catch (const std::exception& e) {
+      // Tried again at the next beat. Should the lease lapse meanwhile and another manager
+      // take the run, this one's next write is refused (ABORTED) and it stops then.
+      report("run " + std::to_string(run_id) + ": renewing its lease: " + e.what());
+      if (!dynamic_cast<const store::BusyError*>(&e)) store.reset();
+    }
+  }
+}
+
+RunManager::Turn RunManager::finish(store::RunStore& store, std::int64_t run_id,
+                                    store::RunState state, const std::string& error,
+                                    const std::stop_token& shutdown) {
   try {
-    const store::RunRecord run = store.get_run(run_id);
-    if (store::is_terminal(run.state)) return;
+    store::with_retry(
+        options_.retry, [&] { store.set_state(run_id, state, error, options_.owner); }, shutdown);
+    return Turn::kFinished;
+  } catch (const store::BusyError& e) {
+    // Never recorded as failed for a busy store, never stranded: the run stays this
+    // manager's and RUNNING, and is taken up again (resumed from its last checkpoint).
+    report("run " + std::to_string(run_id) + ": recording it " +
+           std::string(store::run_state_name(state)) + ": " + e.what() + "; back to the queue");
+    return Turn::kRequeued;
+  } catch (const Error& e) {
+    report("run " + std::to_string(run_id) + ": recording it " +
+           std::string(store::run_state_name(state)) + ": " + e.what());
+    return Turn::kFinished;  // cancelled or taken over meanwhile: it is not ours to record
+  }
+}
+
+RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecord& run,
+                                   std::stop_token run_stop, const std::stop_token& shutdown) {
+  const std::int64_t run_id = run.id;
+  const auto lost = [&] {
+    std::lock_guard lock(mutex_);
+    return active_->lost;
+  };
+  try {
     const auto [spec, refs] = parse_config(run.spec.config_json);
     TrainingInputs inputs;
     if (refs.parent) inputs.init = store.load_checkpoint(*refs.parent).blob;
@@ -294,7 +418,7 @@ void RunManager::train(store::RunStore& store, std::int64_t run_id, std::stop_to
     TrainingHooks hooks;
     hooks.threads = options_.threads;
     hooks.environments = options_.environments;
-    // Resume: the last checkpoint's weights and the curve up to it.
+    // Resume: the weights with the most training steps and the curve up to them.
     if (const auto latest = store.latest_checkpoint(run_id)) {
       inputs.init = store.load_checkpoint(latest->id).blob;
       for (const auto& m : store.metrics(run_id))
@@ -309,15 +433,27 @@ void RunManager::train(store::RunStore& store, std::int64_t run_id, std::stop_to
       active_->start_steps = active_->steps = start_steps;
       active_->max_steps = spec.stop.max_steps;
     }
-    store.set_state(run_id, store::RunState::kRunning);
     changed();
-    // Shutdown stops the trainer too; the run then stays RUNNING, to resume next start.
+    // Shutdown stops the trainer too; the run then stays RUNNING, released for another
+    // manager (or the next start) to resume.
     std::stop_source trainer_stop;
     std::stop_callback on_cancel(run_stop, [&] { trainer_stop.request_stop(); });
     std::stop_callback on_shutdown(shutdown, [&] { trainer_stop.request_stop(); });
     hooks.control.stop = trainer_stop.get_token();
     hooks.on_evaluation = [&](const rl::CurvePoint& p, const Blob& checkpoint) {
-      store.record_evaluation(run_id, to_metric(p), checkpoint, false, std::nullopt);
+      store::with_retry(
+          options_.retry,
+          [&] {
+            store.record_evaluation(run_id, to_metric(p), checkpoint, false, std::nullopt,
+                                    options_.owner);
+          },
+          shutdown);
+      if (options_.retention) {
+        try {
+          store.prune_checkpoints(run_id, *options_.retention);
+        } catch (const store::BusyError&) {  // the next evaluation prunes what is left
+        }
+      }
       {
         std::lock_guard lock(mutex_);
         active_->steps = p.env_steps;
@@ -330,23 +466,37 @@ void RunManager::train(store::RunStore& store, std::int64_t run_id, std::stop_to
       std::lock_guard lock(mutex_);
       cancel_requested = active_->cancel_requested;
     }
+    if (lost()) return Turn::kFinished;  // cancelled elsewhere or taken over
     if (outcome.result.cancelled) {
-      if (cancel_requested) store.set_state(run_id, store::RunState::kCancelled);
-      return;  // shut down: stays RUNNING
+      if (cancel_requested) return finish(store, run_id, store::RunState::kCancelled, "", shutdown);
+      return Turn::kReleased;  // shut down
     }
     if (!outcome.result.curve.empty()) {  // the summary: reached and steps to target
-      store.record_metric(run_id, to_metric(outcome.result.curve.back()), outcome.result.reached,
-                          outcome.result.reached
-                              ? std::optional<long long>(outcome.result.steps_to_target)
-                              : std::nullopt);
+      store::with_retry(
+          options_.retry,
+          [&] {
+            store.record_metric(
+                run_id, to_metric(outcome.result.curve.back()), outcome.result.reached,
+                outcome.result.reached ? std::optional<long long>(outcome.result.steps_to_target)
+                                       : std::nullopt,
+                options_.owner);
+          },
+          shutdown);
     }
-    store.set_state(run_id, store::RunState::kSucceeded);
+    return finish(store, run_id, store::RunState::kSucceeded, "", shutdown);
+  } catch (const store::BusyError& e) {
+    if (shutdown.stop_requested()) return Turn::kReleased;
+    report("run " + std::to_string(run_id) + ": the store stayed busy (" + e.what() +
+           "); the run pauses and goes back to the queue");
+    return Turn::kRequeued;
   } catch (const std::exception& e) {
-    try {
-      store.set_state(run_id, store::RunState::kFailed, e.what());
-    } catch (const std::exception&) {
-      // The store itself failed: the run stays as it was and resumes at the next start.
+    const auto* error = dynamic_cast<const Error*>(&e);
+    if (lost() || (error && error->code() == ErrorCode::kAborted)) {
+      report("run " + std::to_string(run_id) +
+             ": stopped, no longer held by this server: " + e.what());
+      return Turn::kFinished;
     }
+    return finish(store, run_id, store::RunState::kFailed, e.what(), shutdown);
   }
 }
 

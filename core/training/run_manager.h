@@ -4,15 +4,20 @@
 //
 // A run is validated completely (spec, and every checkpoint it references: present,
 // intact, of the right role) before it is stored, so a refused request leaves nothing
-// behind. While it trains, every evaluation is written with the checkpoint it evaluated
-// in one transaction. A run still PENDING or RUNNING when the process stops (a crash, a
-// SIGKILL, or a shutdown) is picked up again by the next RunManager of its role: it
-// resumes from its last checkpoint with its learning curve intact.
+// behind. The worker claims runs from the store (store::RunStore::claim_next) and holds
+// each with a lease that a heartbeat renews, so several managers of one role on one store
+// (several servers, or a restarted one beside a hung one) never train the same run: a run
+// whose owner stops renewing (killed, hung) is taken over by another manager once its
+// lease expires, and resumes from its last checkpoint with its learning curve intact.
+// While it trains, every evaluation is written with the checkpoint it evaluated in one
+// transaction, by its owner only. A busy database pauses a run (retried with backoff,
+// then the run goes back to the queue) instead of failing it; FAILED is for errors of the
+// training itself.
 
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <deque>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <stop_token>
@@ -20,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "store/retry.h"
 #include "store/run_store.h"
 #include "training/role_training.h"
 #include "training/training_spec.h"
@@ -40,31 +46,48 @@ struct RunManagerOptions {
   std::string code_commit;           // recorded with every run and checkpoint
   std::size_t threads = 0;           // trainer threads (0: all cores); results do not depend on it
   EnvironmentSource environments{};  // where rollouts run (empty: in this process)
+  // This manager's name in run leases (empty: host:pid:start time, unique per process).
+  std::string owner{};
+  // A run whose owner has not renewed its lease for this long may be taken over; the
+  // heartbeat renews it every lease / 4, and an idle worker looks for runs as often.
+  std::chrono::milliseconds lease = std::chrono::seconds(10);
+  store::RetryPolicy retry{};  // store writes while the database is busy
+  // Checkpoints kept per run besides its best, promoted and referenced ones (pruned after
+  // every evaluation); empty keeps all.
+  std::optional<store::RetentionPolicy> retention = store::RetentionPolicy{};
+  // Where the worker reports what it could not do (a busy store, a run taken over); the
+  // service passes its logger. Empty: standard error.
+  std::function<void(const std::string&)> log{};
 };
 
 class RunManager {
  public:
-  // Opens the store and queues this role's interrupted runs, oldest first.
+  // Opens the store and starts the worker, which takes this role's pending and interrupted
+  // runs, oldest first.
   explicit RunManager(const RunManagerOptions& options);
-  // Stops the active run where it is, leaving it RUNNING so the next start resumes it.
+  // Stops the active run where it is and releases it (still RUNNING): another manager of
+  // the role, or the next start, resumes it.
   ~RunManager();
   RunManager(const RunManager&) = delete;
   RunManager& operator=(const RunManager&) = delete;
 
   const std::string& role() const { return options_.role; }
+  const std::string& owner() const { return options_.owner; }
 
   // INVALID_ARGUMENT (spec, role, checkpoint roles), NOT_FOUND (checkpoint ids),
   // DATA_LOSS (corrupted checkpoint), FAILED_PRECONDITION (no promoted expert).
   store::RunRecord create(const TrainingSpec& spec, const CheckpointRefs& refs);
-  // A pending run is cancelled at once; a running one stops at its next round. A finished
-  // run is FAILED_PRECONDITION; another role's run is FAILED_PRECONDITION too (its own
-  // service owns it).
+  // A pending run is cancelled at once; a running one stops at its next round (here, or on
+  // the manager that holds it, at its next heartbeat). A finished run is
+  // FAILED_PRECONDITION; another role's run is FAILED_PRECONDITION too (its own service
+  // owns it).
   store::RunRecord cancel(std::int64_t run_id);
 
   // Reads, serialised on one connection (handlers call these from many threads).
   store::RunRecord get(std::int64_t run_id);
   std::vector<store::RunRecord> list(store::RunFilter filter);
   std::vector<store::MetricPoint> metrics(std::int64_t run_id);
+  std::vector<store::MetricPoint> metrics_after(std::int64_t run_id, long long after_env_steps);
   std::vector<store::CheckpointInfo> checkpoints(std::int64_t run_id);
 
   // Seconds to the run's step cap at its current rate (an upper bound: it stops sooner if
@@ -73,7 +96,7 @@ class RunManager {
 
   // What the worker is doing now, for monitoring (Prometheus gauges in the service).
   struct Load {
-    std::size_t queued = 0;              // runs waiting behind the active one
+    std::size_t queued = 0;              // runs of the role waiting for a worker
     std::optional<std::int64_t> active;  // the run training now
     long long active_env_steps = 0;      // its training env steps so far
     double active_steps_per_s = 0;       // since it (re)started; 0 before its first report
@@ -92,11 +115,19 @@ class RunManager {
     std::chrono::steady_clock::time_point started;
     long long start_steps = 0, steps = 0, max_steps = 0;
     bool cancel_requested = false;
+    bool lost = false;  // cancelled elsewhere or taken over: write nothing more
   };
+  // How a claimed run's turn ended.
+  enum class Turn { kFinished, kReleased, kRequeued };
 
   void work(std::stop_token shutdown);
-  void train(store::RunStore& store, std::int64_t run_id, std::stop_token run_stop,
+  void heartbeat(std::stop_token shutdown);
+  Turn train(store::RunStore& store, const store::RunRecord& run, std::stop_token run_stop,
              const std::stop_token& shutdown);
+  Turn finish(store::RunStore& store, std::int64_t run_id, store::RunState state,
+              const std::string& error, const std::stop_token& shutdown);
+  void sleep_until_woken(std::chrono::milliseconds timeout, const std::stop_token& shutdown);
+  void report(const std::string& message) const;
   void changed();
 
   RunManagerOptions options_;
@@ -104,13 +135,16 @@ class RunManager {
   store::RunStore handler_store_;  // for request handlers; guarded by handler_mutex_
 
   mutable std::mutex mutex_;
-  std::condition_variable_any queue_cv_;
+  std::condition_variable_any wake_cv_;
   mutable std::condition_variable change_cv_;
-  std::deque<std::int64_t> queue_;
+  bool woken_ = false;  // a run was created or cancelled since the worker last looked
+  std::size_t queued_ = 0;
   std::optional<Active> active_;
   std::uint64_t generation_ = 0;
 
-  std::jthread worker_;  // last: stopped and joined before the members above go
+  // Last: stopped and joined before the members above go.
+  std::jthread worker_;
+  std::jthread heartbeat_;
 };
 
 }  // namespace pnp::training

@@ -18,6 +18,8 @@ grpc::StatusCode status_code(ErrorCode code) {
       return grpc::StatusCode::DATA_LOSS;
     case ErrorCode::kUnavailable:
       return grpc::StatusCode::UNAVAILABLE;
+    case ErrorCode::kAborted:
+      return grpc::StatusCode::ABORTED;
     case ErrorCode::kCancelled:
       return grpc::StatusCode::CANCELLED;
     case ErrorCode::kInternal:

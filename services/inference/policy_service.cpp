@@ -1,7 +1,10 @@
 #include "services/inference/policy_service.h"
 
+#include <filesystem>
+
 #include "services/common/convert.h"
 #include "services/common/status.h"
+#include "store/schema.h"
 
 namespace pnp::services {
 namespace {
@@ -25,21 +28,53 @@ bool serves_role(serving::PolicyKind kind, const std::string& role) {
 
 }  // namespace
 
+namespace {
+
+// The serving connection is read-only: serving never writes, and a store on a read-only
+// file (or a replica's copy) is served. A new file (--create-db) or an older schema is
+// first set up read-write, once.
+store::RunStore open_for_serving(const std::string& path) {
+  if (path == ":memory:") return store::RunStore(path);
+  const bool current = std::filesystem::exists(path) && [&] {
+    store::Database probe(path, {.access = store::Access::kReadOnly});
+    return probe.pragma_int("user_version") >= store::schema_version();
+  }();
+  if (!current) store::RunStore migrate_once(path);
+  return store::RunStore(path, {.access = store::Access::kReadOnly});
+}
+
+}  // namespace
+
 PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::PolicyKind kind)
-    : kind_(kind), store_(db_path) {
+    : kind_(kind), db_path_(db_path), store_(open_for_serving(db_path)) {
   try {
     reload();
-  } catch (const Error&) {  // nothing promoted yet: serve once something is
+  } catch (const Error& e) {
+    // Nothing promoted yet, or a promoted checkpoint that cannot be served (corrupted):
+    // start serving nothing, and say why to every caller until a reload succeeds. Any
+    // other error (the store cannot be read) stops the server at start.
+    if (e.code() != ErrorCode::kFailedPrecondition && e.code() != ErrorCode::kDataLoss) throw;
+    std::lock_guard lock(store_mutex_);
+    load_error_ = e.what();
   }
 }
 
 bool PolicyServiceImpl::reload() {
   std::lock_guard lock(store_mutex_);
+  // One snapshot for the promotions and the checkpoints they name: a promotion committed
+  // meanwhile is seen whole at the next reload, never half now.
+  store::ReadTransaction snapshot(store_.database());
   const auto ids = serving::promoted_checkpoint_ids(store_, kind_);
   const auto current = served_.load();
   if (ids && current && current->checkpoint_ids() == *ids) return false;
-  auto next = serving::load_promoted(store_, kind_);
-  served_.store(std::move(next));
+  try {
+    auto next = serving::load_promoted(store_, kind_);
+    served_.store(std::move(next));
+    load_error_.clear();
+  } catch (const Error& e) {
+    load_error_ = e.what();
+    throw;
+  }
   return true;
 }
 
@@ -49,16 +84,21 @@ std::vector<serving::BatchStats> PolicyServiceImpl::batch_stats() const {
                 : std::vector<serving::BatchStats>(serving::batched_actors(kind_).size());
 }
 
-std::shared_ptr<const serving::ServedPolicy> PolicyServiceImpl::served_or_unavailable() const {
+std::shared_ptr<const serving::ServedPolicy> PolicyServiceImpl::served_or_unavailable() {
   auto served = served_.load();
   if (served) return served;
+  std::string why;
+  {
+    std::lock_guard lock(store_mutex_);
+    if (!load_error_.empty()) why = " (loading the promoted one failed: " + load_error_ + ")";
+  }
   if (kind_ == serving::PolicyKind::kEndToEnd) {
     throw Error(ErrorCode::kFailedPrecondition,
-                "no end-to-end policy is served yet: promote an e2e checkpoint");
+                "no end-to-end policy is served yet" + why + ": promote an e2e checkpoint");
   }
   throw Error(ErrorCode::kFailedPrecondition,
-              "no hierarchy is served yet: promote an approach, manipulate, retract and hlc "
-              "checkpoint");
+              "no hierarchy is served yet" + why +
+                  ": promote an approach, manipulate, retract and hlc checkpoint");
 }
 
 grpc::Status PolicyServiceImpl::Predict(grpc::ServerContext*,
@@ -103,24 +143,38 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
     grpc::ServerContext*, const policy::v1::PromoteCheckpointRequest* request,
     policy::v1::PromoteCheckpointResponse* response) {
   return guarded([&] {
-    if (request->checkpoint_id() <= 0) {
-      throw_invalid_argument("checkpoint_id", "a positive id",
-                             std::to_string(request->checkpoint_id()));
+    std::vector<std::int64_t> ids;
+    if (request->checkpoint_id() != 0 || request->checkpoint_ids().empty())
+      ids.push_back(request->checkpoint_id());
+    ids.insert(ids.end(), request->checkpoint_ids().begin(), request->checkpoint_ids().end());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ids[i] <= 0) {
+        throw_invalid_argument(i == 0 && request->checkpoint_id() != 0
+                                   ? "checkpoint_id"
+                                   : "checkpoint_ids[" + std::to_string(i) + "]",
+                               "a positive id", std::to_string(ids[i]));
+      }
     }
-    store::Promotion promotion;
-    store::CheckpointInfo info;
-    std::optional<store::CheckpointInfo> latest;
     {
       std::lock_guard lock(store_mutex_);
-      promotion = store_.promote(request->checkpoint_id());
-      info = store_.checkpoint_info(promotion.checkpoint_id);
-      latest = store_.latest_checkpoint(info.run_id);
+      if (!writer_) writer_.emplace(db_path_);  // the one write this service makes
+      for (const store::Promotion& promotion : writer_->promote(ids)) {
+        const store::CheckpointInfo info = writer_->checkpoint_info(promotion.checkpoint_id);
+        const auto latest = writer_->latest_checkpoint(info.run_id);
+        auto* out = response->add_promoted();
+        out->set_role(role_from_name(promotion.role));
+        out->set_checkpoint_id(promotion.checkpoint_id);
+        out->set_run_id(info.run_id);
+        out->set_env_steps(info.env_steps);
+        out->set_latest_of_run(latest && latest->id == info.id);
+      }
     }
-    response->set_role(role_from_name(promotion.role));
-    response->set_checkpoint_id(promotion.checkpoint_id);
-    response->set_run_id(info.run_id);
-    response->set_env_steps(info.env_steps);
-    response->set_latest_of_run(latest && latest->id == info.id);
+    const auto& first = response->promoted(0);
+    response->set_role(first.role());
+    response->set_checkpoint_id(first.checkpoint_id());
+    response->set_run_id(first.run_id());
+    response->set_env_steps(first.env_steps());
+    response->set_latest_of_run(first.latest_of_run());
     // Serve it now if it completes (or changes) the served kind's roles; a role the kind
     // does not use changes nothing, an incomplete hierarchy keeps the old one.
     try {

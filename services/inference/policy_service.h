@@ -11,6 +11,7 @@
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,11 +52,14 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
                     policy::v1::PingResponse* response) override;
 
  private:
-  std::shared_ptr<const serving::ServedPolicy> served_or_unavailable() const;
+  std::shared_ptr<const serving::ServedPolicy> served_or_unavailable();
 
   const serving::PolicyKind kind_;
-  std::mutex store_mutex_;  // the connection is used by one thread at a time
-  store::RunStore store_;
+  const std::string db_path_;
+  std::mutex store_mutex_;  // guards both connections: each is used by one thread at a time
+  store::RunStore store_;   // read-only: serving
+  std::optional<store::RunStore> writer_;  // opened at the first promotion
+  std::string load_error_;  // why the last load failed (empty: it did not); store_mutex_
   std::atomic<std::shared_ptr<const serving::ServedPolicy>> served_;
 };
 

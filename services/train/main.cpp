@@ -72,6 +72,16 @@ int main(int argc, char** argv) {
   app.add_option("--sim-address", sim_addresses,
                  "a simulation service to run rollouts on (repeat for several; default: rollouts "
                  "in this process)");
+  double lease_s = 10;
+  app.add_option("--run-lease-s", lease_s,
+                 "a run whose server stops renewing its lease for this long is taken over by "
+                 "another server of the role")
+      ->capture_default_str();
+  int keep_checkpoints = pnp::store::RetentionPolicy{}.keep_last;
+  app.add_option("--keep-checkpoints", keep_checkpoints,
+                 "checkpoints kept per run besides its best, promoted and referenced ones (0: "
+                 "keep all)")
+      ->capture_default_str();
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
@@ -98,8 +108,24 @@ int main(int argc, char** argv) {
                                                                    world);
       };
     }
-    pnp::training::RunManager manager(
-        {db, role, std::string(pnp::kCodeCommit), threads, environments});
+    if (!(lease_s >= 0.1 && lease_s <= 3600)) {
+      pnp::throw_invalid_argument("--run-lease-s", "0.1 to 3600 seconds", std::to_string(lease_s));
+    }
+    if (keep_checkpoints < 0) {
+      pnp::throw_invalid_argument("--keep-checkpoints", "0 (keep all) or more",
+                                  std::to_string(keep_checkpoints));
+    }
+    pnp::training::RunManagerOptions options{db, role, std::string(pnp::kCodeCommit), threads,
+                                             environments};
+    options.lease = std::chrono::milliseconds(static_cast<long long>(lease_s * 1000));
+    if (keep_checkpoints == 0)
+      options.retention.reset();
+    else
+      options.retention = pnp::store::RetentionPolicy{keep_checkpoints};
+    options.log = [name](const std::string& line) {
+      log_event(name, "store", {{"message", line}});
+    };
+    pnp::training::RunManager manager(options);
     TrainingServiceImpl service(manager);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
@@ -108,9 +134,13 @@ int main(int argc, char** argv) {
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address});
     TrainingGauges gauges(metrics, role);
-    return serve_until_terminated(
-        runtime, name, [&] { gauges.update(manager.load()); }, std::chrono::milliseconds(1000),
-        {{"db", db}, {"role", role}, {"sim_addresses", sim_addresses}, {"gemm_path", gemm_path}});
+    return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
+                                  std::chrono::milliseconds(1000),
+                                  {{"db", db},
+                                   {"role", role},
+                                   {"owner", manager.owner()},
+                                   {"sim_addresses", sim_addresses},
+                                   {"gemm_path", gemm_path}});
   } catch (const pnp::Error& e) {
     log_event(name, "fatal", {{"error", e.what()}});
     return 1;

@@ -49,11 +49,15 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   out.set_gemm_path(run.spec.gemm_path);
   out.set_parent_checkpoint_id(run.spec.parent_checkpoint_id.value_or(0));
   out.set_env_steps(run.env_steps);
-  const training::TrainingSpec spec =
-      training::spec_from_json(nlohmann::json::parse(run.spec.config_json)["spec"]);
-  out.set_max_steps(spec.stop.max_steps);
-  out.set_target_success(spec.stop.target_success);
-  out.set_world(to_proto(spec.world));
+  // A run created by a training service stores its spec; an imported one (a checkpoint
+  // file brought into the store) has none, and shows no cap, target or world.
+  const auto config = nlohmann::json::parse(run.spec.config_json, nullptr, false);
+  if (config.is_object() && config.contains("spec")) {
+    const training::TrainingSpec spec = training::spec_from_json(config["spec"]);
+    out.set_max_steps(spec.stop.max_steps);
+    out.set_target_success(spec.stop.target_success);
+    out.set_world(to_proto(spec.world));
+  }
   out.set_last_success(run.last_success);
   if (run.last_score) out.set_last_score(*run.last_score);
   out.set_reached(run.reached);
@@ -126,7 +130,8 @@ grpc::Status TrainingServiceImpl::WatchTrainingRun(
     const std::int64_t id = require_run_id(request->run_id());
     std::uint64_t seen = manager_.generation();
     store::RunRecord run = manager_.get(id);
-    std::size_t sent = manager_.metrics(id).size();  // the watch starts from now
+    const auto so_far = manager_.metrics(id);  // the watch starts from now
+    long long sent_steps = so_far.empty() ? -1 : so_far.back().env_steps;
     WatchTrainingRunResponse first;
     fill(run, *first.mutable_run());
     if (!writer->Write(first)) return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
@@ -135,12 +140,13 @@ grpc::Status TrainingServiceImpl::WatchTrainingRun(
         return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled by the client");
       seen = manager_.wait_for_change(seen, kWatchPoll);
       run = manager_.get(id);
-      const auto metrics = manager_.metrics(id);
+      const auto metrics = manager_.metrics_after(id, sent_steps);  // the new points only
       const bool finished = store::is_terminal(run.state);
-      for (; sent < metrics.size(); ++sent) {
+      for (const auto& point : metrics) {
+        sent_steps = point.env_steps;
         WatchTrainingRunResponse message;
         fill(run, *message.mutable_run());
-        to_proto(metrics[sent], *message.mutable_metric());
+        to_proto(point, *message.mutable_metric());
         if (!writer->Write(message))
           return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
       }

@@ -1,13 +1,19 @@
 // Integration: a training service killed mid-run (SIGKILL, no chance to clean up) or
 // stopped (SIGTERM) leaves a consistent store, and when it starts again on the same file
-// the same run resumes from its last checkpoint with its learning curve intact.
+// the same run resumes from its last checkpoint with its learning curve intact. Two
+// services of one role on one file never train one run together, and the survivor takes
+// over a killed one's run once its lease expires; a store locked by another process for
+// 15 s pauses a run, which then finishes.
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pnp/train/v1/train_service.grpc.pb.h"
@@ -50,11 +56,13 @@ tv1::CreateTrainingRunRequest endless_run() {
 // pnp-train-server --role approach over `db`, and a stub to it.
 class Trainer {
  public:
+  // A short lease: a killed server's run is taken over (or resumed) within a second.
   Trainer(const TempDir& dir, const std::string& name)
-      : process_(name,
-                 {std::string(PNP_BIN_DIR) + "/pnp-train-server", "--role", "approach", "--address",
-                  "127.0.0.1:0", "--db", dir.file("pnp.db"), "--threads", "1"},
-                 dir.path()),
+      : process_(
+            name,
+            {std::string(PNP_BIN_DIR) + "/pnp-train-server", "--role", "approach", "--address",
+             "127.0.0.1:0", "--db", dir.file("pnp.db"), "--threads", "1", "--run-lease-s", "1"},
+            dir.path()),
         port_(process_.port()) {
     if (port_ > 0) {
       stub_ = tv1::TrainingService::NewStub(
@@ -173,10 +181,16 @@ Interrupted check_interrupted_store(const std::string& db, std::int64_t run_id,
               1)
         << "evaluation at " << point.env_steps() << " lost";
   }
-  // Evaluations and checkpoints pair up, step for step.
-  EXPECT_EQ(
-      store.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY env_steps", {run_id}),
-      store.rows("SELECT env_steps FROM metrics WHERE run_id = ? ORDER BY env_steps", {run_id}));
+  // Every checkpoint kept has its evaluation (they are written together), the last
+  // evaluation's checkpoint is kept, and retention left a few (the last 3 and the best).
+  EXPECT_EQ(store.integer("SELECT COUNT(*) FROM checkpoints c WHERE run_id = ? AND NOT EXISTS "
+                          "(SELECT 1 FROM metrics m WHERE m.run_id = c.run_id AND "
+                          "m.env_steps = c.env_steps)",
+                          {run_id}),
+            0);
+  EXPECT_EQ(store.integer("SELECT MAX(env_steps) FROM checkpoints WHERE run_id = ?", {run_id}),
+            store.integer("SELECT MAX(env_steps) FROM metrics WHERE run_id = ?", {run_id}));
+  EXPECT_LE(store.integer("SELECT COUNT(*) FROM checkpoints WHERE run_id = ?", {run_id}), 4);
   EXPECT_EQ(store.integer("SELECT COUNT(*) FROM checkpoints WHERE run_id = ? AND "
                           "(length(blob) = 0 OR length(blob) != size_bytes)",
                           {run_id}),
@@ -286,6 +300,119 @@ TEST(ResumeAfterKill, ASigtermMidRunDrainsAndTheRunResumes) {
   const Interrupted before = check_interrupted_store(dir.file("pnp.db"), run_id, seen);
   ASSERT_GE(before.metrics.size(), 1u);
   expect_resumes(dir, run_id, before);
+}
+
+// The run's curve and checkpoints show one trainer: evaluation steps strictly increase,
+// and checkpoints in the order they were written have strictly increasing steps.
+void expect_one_trainer(const StoreReader& store, std::int64_t run_id) {
+  const auto metric_steps =
+      store.rows("SELECT env_steps FROM metrics WHERE run_id = ? ORDER BY rowid", {run_id});
+  const auto by_id =
+      store.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY id", {run_id});
+  const auto by_steps =
+      store.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY env_steps", {run_id});
+  EXPECT_EQ(by_id, by_steps) << "checkpoints written out of step order: two trainers";
+  EXPECT_EQ(store.integer("SELECT COUNT(*) - COUNT(DISTINCT env_steps) FROM checkpoints WHERE "
+                          "run_id = ?",
+                          {run_id}),
+            0);
+  EXPECT_FALSE(metric_steps.empty());
+}
+
+std::string owner_of(const std::string& db, std::int64_t run_id) {
+  return StoreReader(db).text("SELECT COALESCE(owner, '') FROM runs WHERE id = ?", {run_id});
+}
+
+TEST(RunOwnership, TwoServersOfARoleNeverShareARunAndASurvivorTakesOverAKilledOnesRun) {
+  TempDir dir("two_trainers");
+  const std::string db = dir.file("pnp.db");
+  std::optional<Trainer> a(std::in_place, dir, "train-a");
+  ASSERT_TRUE(a->started()) << a->process().diagnostics();
+  Trainer b(dir, "train-b");
+  ASSERT_TRUE(b.started()) << b.process().diagnostics();
+  const std::int64_t first = a->create(endless_run()).run_id();
+  const std::int64_t second = a->create(endless_run()).run_id();
+  // Each server takes one: both train at once, each under its own owner.
+  std::vector<tv1::MetricPoint> seen = wait_for_evaluations(*a, first, 2);
+  wait_for_evaluations(b, second, 2);
+  const std::string first_owner = owner_of(db, first), second_owner = owner_of(db, second);
+  EXPECT_FALSE(first_owner.empty());
+  EXPECT_FALSE(second_owner.empty());
+  EXPECT_NE(first_owner, second_owner);
+
+  // Kill the first run's server; free the other one by cancelling its run there.
+  const bool a_holds_first =
+      first_owner.find(":" + std::to_string(a->process().pid()) + ":") != std::string::npos;
+  Trainer& survivor = a_holds_first ? b : *a;
+  (a_holds_first ? a->process() : b.process()).kill();
+  survivor.cancel(second);  // the survivor's own run
+  const std::int64_t orphan = first;
+  const auto killed_at = std::chrono::steady_clock::now();
+  const long long steps_before = seen.back().env_steps();
+  std::vector<tv1::MetricPoint> curve;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        curve = survivor.metrics(orphan);
+        return finished(survivor.get(orphan)) ||
+               (owner_of(db, orphan) != first_owner && !curve.empty() &&
+                curve.back().env_steps() > steps_before + 400);
+      },
+      kGuard, 50ms))
+      << survivor.process().diagnostics();
+  const double takeover_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
+  std::printf(
+      "[ measured ] the survivor trained the killed server's run within %.1f s (lease 1 s)\n",
+      takeover_s);
+  ASSERT_FALSE(finished(survivor.get(orphan)));
+  EXPECT_NE(owner_of(db, orphan), first_owner);
+  for (std::size_t i = 1; i < curve.size(); ++i)
+    EXPECT_GT(curve[i].env_steps(), curve[i - 1].env_steps()) << "point " << i;
+  survivor.cancel(orphan);
+  ASSERT_TRUE(wait_until([&] { return finished(survivor.get(orphan)); }, kGuard, 50ms));
+  EXPECT_EQ(survivor.get(orphan).state(), tv1::RUN_STATE_CANCELLED);
+  const auto stopped = survivor.stop();
+  ASSERT_TRUE(stopped && stopped->ok()) << survivor.process().diagnostics();
+  const StoreReader store(db);
+  EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
+  expect_one_trainer(store, first);
+  expect_one_trainer(store, second);
+}
+
+// Another process holds the write lock for 15 s (a backup, a long migration, an operator's
+// sqlite3 shell): the run waits and retries, is never marked failed, and then finishes.
+TEST(RunOwnership, AStoreLockedForFifteenSecondsPausesARunWhichThenSucceeds) {
+  TempDir dir("locked_store");
+  const std::string db = dir.file("pnp.db");
+  Trainer trainer(dir, "train");
+  ASSERT_TRUE(trainer.started()) << trainer.process().diagnostics();
+  auto request = endless_run();
+  request.mutable_stop()->set_max_steps(3000);
+  const std::int64_t run_id = trainer.create(request).run_id();
+  wait_for_evaluations(trainer, run_id, 1);
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+  std::unique_ptr<sqlite3, int (*)(sqlite3*)> lock(raw, sqlite3_close);
+  ASSERT_EQ(sqlite3_exec(raw, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+  const auto until = std::chrono::steady_clock::now() + 15s;
+  while (std::chrono::steady_clock::now() < until) {
+    EXPECT_FALSE(finished(trainer.get(run_id))) << "a run finished while the store was locked";
+    std::this_thread::sleep_for(500ms);
+  }
+  ASSERT_EQ(sqlite3_exec(raw, "ROLLBACK", nullptr, nullptr, nullptr), SQLITE_OK);
+  tv1::TrainingRun run;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        run = trainer.get(run_id);
+        return finished(run);
+      },
+      kGuard, 100ms))
+      << trainer.process().diagnostics();
+  EXPECT_EQ(run.state(), tv1::RUN_STATE_SUCCEEDED) << run.error();
+  EXPECT_GE(run.env_steps(), 3000);
+  const auto stopped = trainer.stop();
+  ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
+  expect_one_trainer(StoreReader(db), run_id);
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "store/run_store.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <filesystem>
@@ -12,48 +11,10 @@
 
 #include "common/error.h"
 #include "store/schema.h"
+#include "tests/core/store/store_fixture.h"
 
 namespace pnp::store {
 namespace {
-
-// A fresh database file per test, removed afterwards (with its WAL files).
-class StoreTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("pnp_store_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-    path_ = (dir_ / "pnp.db").string();
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  static RunSpec spec(const std::string& role = "approach") {
-    RunSpec s;
-    s.role = role;
-    s.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
-    s.robot = "fetch";
-    s.object = "block";
-    s.seed = 7;
-    s.config_json = R"({"batch_size":256})";
-    s.code_commit = "abc123";
-    return s;
-  }
-
-  static ErrorCode code_of(const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const Error& e) {
-      return e.code();
-    }
-    ADD_FAILURE() << "no error";
-    return ErrorCode::kInternal;
-  }
-
-  std::filesystem::path dir_;
-  std::string path_;
-};
 
 TEST_F(StoreTest, OpensWithWalForeignKeysAndTheCurrentSchema) {
   RunStore store(path_);
