@@ -418,12 +418,21 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
     TrainingHooks hooks;
     hooks.threads = options_.threads;
     hooks.environments = options_.environments;
-    // Resume: the weights with the most training steps and the curve up to them.
-    if (const auto latest = store.latest_checkpoint(run_id)) {
-      inputs.init = store.load_checkpoint(latest->id).blob;
+    // Resume: the intact weights with the most training steps and the curve up to them. A
+    // damaged checkpoint (DATA_LOSS) is passed over for the one before it.
+    const auto saved = store.checkpoints(run_id);
+    for (auto c = saved.rbegin(); c != saved.rend(); ++c) {
+      try {
+        inputs.init = store.load_checkpoint(c->id).blob;
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kDataLoss) throw;
+        report("run " + std::to_string(run_id) + ": " + e.what() +
+               "; resuming from an earlier one");
+        continue;
+      }
       for (const auto& m : store.metrics(run_id))
-        if (m.env_steps <= latest->env_steps)
-          hooks.control.resume_curve.push_back(to_curve_point(m));
+        if (m.env_steps <= c->env_steps) hooks.control.resume_curve.push_back(to_curve_point(m));
+      break;
     }
     const long long start_steps =
         hooks.control.resume_curve.empty() ? 0 : hooks.control.resume_curve.back().env_steps;

@@ -6,11 +6,14 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "store/checkpoint_import.h"
+#include "store/run_store.h"
 #include "tests/integration/child_process.h"
 #include "tests/integration/store_reader.h"
 
@@ -68,6 +71,26 @@ TEST(ServerProcess, ASecondServerOnAPortInUseExitsNamingIt) {
   EXPECT_TRUE(status->ok()) << first.diagnostics();
 }
 
+// An inference server's serving status, once it listens (empty if it never did or the
+// call failed).
+std::optional<pnp::policy::v1::GetServingStatusResponse> serving_status(ChildProcess& server) {
+  const int port = server.port();
+  if (port <= 0) return std::nullopt;
+  auto stub = pnp::policy::v1::PolicyService::NewStub(channel(port));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  pnp::policy::v1::GetServingStatusResponse status;
+  if (!stub->GetServingStatus(&context, {}, &status).ok()) return std::nullopt;
+  return status;
+}
+
+// SIGTERM, then a drained exit with status 0.
+void expect_clean_exit(ChildProcess& server) {
+  const auto ended = server.terminate_and_wait();
+  ASSERT_TRUE(ended) << server.diagnostics();
+  EXPECT_TRUE(ended->ok()) << server.diagnostics();
+}
+
 TEST(ServerProcess, InferenceServerStartsOnAnEmptyStoreAndDrains) {
   TempDir dir("inference_server");
   {
@@ -75,19 +98,39 @@ TEST(ServerProcess, InferenceServerStartsOnAnEmptyStoreAndDrains) {
                         {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db",
                          dir.file("pnp.db"), "--create-db"},
                         dir.path());
-    const int port = server.port();
-    ASSERT_GT(port, 0) << server.diagnostics();
-    auto stub = pnp::policy::v1::PolicyService::NewStub(channel(port));
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
-    pnp::policy::v1::GetServingStatusResponse status;
-    ASSERT_TRUE(stub->GetServingStatus(&context, {}, &status).ok());
-    EXPECT_FALSE(status.ready());
-    const auto ended = server.terminate_and_wait();
-    ASSERT_TRUE(ended) << server.diagnostics();
-    EXPECT_TRUE(ended->ok()) << server.diagnostics();
+    const auto status = serving_status(server);
+    ASSERT_TRUE(status) << server.diagnostics();
+    EXPECT_FALSE(status->ready());
+    expect_clean_exit(server);
   }
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "pnp.db"));
+}
+
+// The inference service only reads the store: it serves a file it may not write (its
+// permissions bind when the tests do not run as root; the read-only connection is pinned
+// by StoreTest.AReadOnlyOpenNeverWritesAndSaysSoWhenAskedTo) and it serves while another
+// process holds the write lock.
+TEST(ServerProcess, InferenceServesAReadOnlyStoreWhileAnotherProcessWrites) {
+  TempDir dir("inference_read_only");
+  const std::string db = dir.file("pnp.db");
+  {
+    pnp::store::RunStore store(db);
+    pnp::store::import_hierarchy(store, PNP_SOURCE_DIR "/tests/data/panda_block", "panda", "block");
+  }
+  pnp::store::Database writer(db);
+  writer.execute("BEGIN IMMEDIATE");  // another process's write lock, for the whole start
+  std::filesystem::permissions(db, std::filesystem::perms::owner_read |
+                                       std::filesystem::perms::group_read |
+                                       std::filesystem::perms::others_read);
+  ChildProcess server("inference",
+                      {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db", db},
+                      dir.path());
+  const auto status = serving_status(server);
+  ASSERT_TRUE(status) << server.diagnostics();
+  EXPECT_TRUE(status->ready()) << server.diagnostics();
+  EXPECT_EQ(status->roles_size(), 4);
+  writer.execute("ROLLBACK");
+  expect_clean_exit(server);
 }
 
 // The platform starts its services at once over one new store file: each creates the

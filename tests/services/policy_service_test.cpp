@@ -306,6 +306,38 @@ TEST_F(PolicyServiceTest, ASessionKeepsItsHierarchyWhileANewPromotionServesNewRe
   EXPECT_EQ(response.choreographer_checkpoint_id(), new_hlc);
 }
 
+// A hierarchy promoted in one call is served whole; two checkpoints of one role are
+// refused naming the field, and nothing changes.
+TEST_F(PolicyServiceTest, PromotesAWholeHierarchyInOneCall) {
+  promote_all(1);
+  start();
+  std::vector<std::int64_t> next;
+  for (const char* role : {"approach", "manipulate", "retract"})
+    next.push_back(store_checkpoint(role, expert_blob(role, 2)));
+  next.push_back(store_checkpoint("hlc", choreographer_blob(2)));
+  pv1::PromoteCheckpointRequest request;
+  for (const auto id : next) request.add_checkpoint_ids(id);
+  request.add_checkpoint_ids(next[0]);  // approach twice
+  pv1::PromoteCheckpointResponse response;
+  {
+    grpc::ClientContext context;
+    const auto status = stub_->PromoteCheckpoint(&context, request, &response);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(status.error_message().find("checkpoint_ids"), std::string::npos);
+  }
+  EXPECT_EQ(store_->promoted("approach")->checkpoint_id, ids_[0]) << "a refusal changes nothing";
+  request.mutable_checkpoint_ids()->RemoveLast();
+  grpc::ClientContext context;
+  ASSERT_TRUE(stub_->PromoteCheckpoint(&context, request, &response).ok());
+  ASSERT_EQ(response.promoted_size(), 4);
+  EXPECT_EQ(response.checkpoint_id(), next[0]);
+  EXPECT_EQ(response.promoted(3).checkpoint_id(), next[3]);
+  grpc::ClientContext predict_context;
+  pv1::PredictResponse predicted;
+  ASSERT_TRUE(stub_->Predict(&predict_context, valid_request(), &predicted).ok());
+  EXPECT_EQ(predicted.choreographer_checkpoint_id(), next[3]) << "the new hierarchy is served";
+}
+
 TEST_F(PolicyServiceTest, ACorruptedPromotedCheckpointIsNeverServed) {
   promote_all(1);
   store_->database().execute("UPDATE checkpoints SET blob = x'00' || substr(blob, 2) WHERE id = " +

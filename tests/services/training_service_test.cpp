@@ -6,11 +6,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "rl/ddpg_her_agent.h"
 #include "rl/expert_checkpoint.h"
 #include "services/common/server_runtime.h"
+#include "store/checkpoint_import.h"
 #include "tests/core/training/small_runs.h"
 
 namespace pnp::services {
@@ -255,6 +257,26 @@ TEST_F(TrainingServiceTest, ListPagesNewestFirst) {
   } while (!token.empty());
   EXPECT_EQ(seen, (std::vector<std::int64_t>{ids[2], ids[1], ids[0]}));
   for (auto id : ids) manager_->cancel(id);
+}
+
+// An imported checkpoint is a finished run without a training spec; a file name with a
+// quote in it once made its config invalid JSON and broke the whole listing.
+TEST_F(TrainingServiceTest, ImportedRunsAreListedBesideTrainedOnes) {
+  start("approach");
+  const std::filesystem::path file = dir_.file("my \"best\" approach.ckpt");
+  std::ofstream(file) << "weights";
+  {
+    store::RunStore store(dir_.file("pnp.db"));
+    store::import_checkpoint(store, {"approach", "ddpg_her", "fetch", "block", file}, false);
+  }
+  grpc::ClientContext context;
+  tv1::ListTrainingRunsResponse listed;
+  const auto status = stub_->ListTrainingRuns(&context, {}, &listed);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(listed.runs_size(), 1);
+  EXPECT_EQ(listed.runs(0).state(), tv1::RUN_STATE_SUCCEEDED);
+  EXPECT_EQ(listed.runs(0).max_steps(), 0) << "an import has no training spec";
+  EXPECT_GT(listed.runs(0).latest_checkpoint_id(), 0);
 }
 
 TEST_F(TrainingServiceTest, CancelEndsTheWatchAndASecondCancelIsAPreconditionFailure) {

@@ -217,5 +217,50 @@ TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
   EXPECT_GT(after[before.size()].episodes, before.back().episodes);
 }
 
+TEST(RunManager, ADamagedLastCheckpointIsPassedOverForTheOneBeforeIt) {
+  ScratchDir dir("run_manager_damaged");
+  const std::string db = dir.file("pnp.db");
+  std::int64_t id = 0;
+  {
+    RunManager first({db, "approach", "test", 1});
+    id = first.create(small_spec("approach", 1200), {}).id;
+    wait_until(first, [&] { return first.checkpoints(id).size() >= 2; });
+  }  // shut down mid-run
+  {
+    store::RunStore store(db);
+    const auto latest = store.latest_checkpoint(id);
+    ASSERT_TRUE(latest);
+    store.database().execute("UPDATE checkpoints SET blob = x'00' || substr(blob, 2) WHERE id = " +
+                             std::to_string(latest->id));
+  }
+  RunManager second({db, "approach", "test", 1});
+  wait_until(second, [&] { return store::is_terminal(second.get(id).state); });
+  const auto run = second.get(id);
+  EXPECT_EQ(run.state, store::RunState::kSucceeded) << run.error;
+  EXPECT_GE(run.env_steps, 1200);
+}
+
+TEST(RunManager, TwoManagersOfARoleShareTheQueueAndNeverARun) {
+  ScratchDir dir("run_manager_two");
+  const std::string db = dir.file("pnp.db");
+  RunManagerOptions options{db, "approach", "test", 1};
+  options.lease = std::chrono::milliseconds(500);
+  options.owner = "first";
+  RunManager first(options);
+  options.owner = "second";
+  RunManager second(options);
+  const auto a = first.create(small_spec("approach", 800), {}).id;
+  const auto b = first.create(small_spec("approach", 800), {}).id;
+  for (const auto id : {a, b})
+    wait_until(first, [&] { return store::is_terminal(first.get(id).state); });
+  store::RunStore store(db);
+  for (const auto id : {a, b}) {
+    EXPECT_EQ(store.get_run(id).state, store::RunState::kSucceeded);
+    const auto checkpoints = store.checkpoints(id);  // by steps; their ids must agree
+    for (std::size_t k = 1; k < checkpoints.size(); ++k)
+      EXPECT_GT(checkpoints[k].id, checkpoints[k - 1].id) << "run " << id << ": two trainers";
+  }
+}
+
 }  // namespace
 }  // namespace pnp::training
