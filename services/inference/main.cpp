@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,8 @@ int main(int argc, char** argv) {
           } catch (const pnp::Error& e) {
             if (e.code() != pnp::ErrorCode::kFailedPrecondition)
               log_event("inference", "reload_failed", {{"error", e.what()}});
+          } catch (const std::exception& e) {  // keeps serving the current policy
+            log_event("inference", "reload_failed", {{"error", e.what()}});
           }
         },
         std::chrono::milliseconds(reload_ms),

@@ -4,10 +4,13 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
@@ -130,6 +133,67 @@ TEST(ServerProcess, InferenceServesAReadOnlyStoreWhileAnotherProcessWrites) {
   EXPECT_TRUE(status->ready()) << server.diagnostics();
   EXPECT_EQ(status->roles_size(), 4);
   writer.execute("ROLLBACK");
+  expect_clean_exit(server);
+}
+
+// Another process promotes two hierarchies in turn, every 10 ms, while a client asks the
+// inference service (reloading every 10 ms) for actions: every answer comes from one
+// hierarchy, its choreographer and expert promoted together, never a mix.
+TEST(ServerProcess, AClientNeverSeesAMixedHierarchyWhileAnotherProcessPromotes) {
+  TempDir dir("promotion_race");
+  const std::string db = dir.file("pnp.db");
+  const std::string data = PNP_SOURCE_DIR "/tests/data/panda_block";
+  std::vector<std::int64_t> first, second;
+  {
+    pnp::store::RunStore store(db);
+    first = pnp::store::import_hierarchy(store, data, "panda", "block");
+    second = pnp::store::import_hierarchy(store, data, "panda", "block");
+  }
+  ChildProcess server("inference",
+                      {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db", db,
+                       "--reload-ms", "10"},
+                      dir.path());
+  const int port = server.port();
+  ASSERT_GT(port, 0) << server.diagnostics();
+  auto stub = pnp::policy::v1::PolicyService::NewStub(channel(port));
+  std::atomic<bool> done{false};
+  std::thread promoter([&] {
+    pnp::store::RunStore writer(db);
+    for (int k = 0; k < 150; ++k) {
+      writer.promote(k % 2 == 0 ? first : second);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    done = true;
+  });
+  pnp::policy::v1::PredictRequest request;
+  for (int i = 0; i < 25; ++i) request.mutable_observation()->add_values(0.1);
+  request.mutable_goal()->set_x_m(0.1);
+  request.mutable_goal()->set_y_m(0.1);
+  request.mutable_goal()->set_z_m(0.1);
+  const auto in = [](const std::vector<std::int64_t>& set, std::int64_t id) {
+    return std::find(set.begin(), set.end(), id) != set.end();
+  };
+  int answers = 0, mixed = 0, from_first = 0, from_second = 0;
+  while (!done) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+    pnp::policy::v1::PredictResponse response;
+    const auto status = stub->Predict(&context, request, &response);
+    if (!status.ok()) continue;  // nothing served yet
+    ++answers;
+    const auto chooser = response.choreographer_checkpoint_id();
+    const auto expert = response.expert_checkpoint_id();
+    if (in(first, chooser) && in(first, expert))
+      ++from_first;
+    else if (in(second, chooser) && in(second, expert))
+      ++from_second;
+    else
+      ++mixed;
+  }
+  promoter.join();
+  EXPECT_EQ(mixed, 0) << answers << " answers";
+  EXPECT_GT(from_first, 0);
+  EXPECT_GT(from_second, 0) << "the promotions were served as they came";
   expect_clean_exit(server);
 }
 
