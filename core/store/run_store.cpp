@@ -541,13 +541,16 @@ GcReport RunStore::prune_checkpoints(std::int64_t run_id, const RetentionPolicy&
 
 GcReport RunStore::collect_garbage(const RetentionPolicy& policy) {
   GcReport report = prune_where("1", std::nullopt, policy);
-  // Free pages go back to the filesystem only on a file created with incremental
-  // auto-vacuum (every file this build creates); older files reuse them for new rows.
+  const std::int64_t before = db_.pragma_int("page_count");
   if (db_.pragma_int("auto_vacuum") == 2) {
-    const std::int64_t before = db_.pragma_int("freelist_count");
-    db_.execute("PRAGMA incremental_vacuum");
-    report.pages_freed = before - db_.pragma_int("freelist_count");
+    db_.execute("PRAGMA incremental_vacuum");  // gives the free pages back
+  } else {
+    // A file created before incremental auto-vacuum: rewritten once (VACUUM, seconds for
+    // hundreds of MB; writers wait), after which its free pages go back as above.
+    db_.execute("PRAGMA auto_vacuum = INCREMENTAL");
+    db_.execute("VACUUM");
   }
+  report.pages_freed = before - db_.pragma_int("page_count");
   db_.execute("PRAGMA wal_checkpoint(TRUNCATE)");
   return report;
 }

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "common/error.h"
+#include "store/retry.h"
 
 namespace pnp::store {
 namespace {
@@ -202,21 +203,25 @@ void migrate_to(Database& db, int target) {
   }
   ForeignKeysOff keys_off(db);
   // The version is re-read under the write lock: processes opening a new file together
-  // (the platform starts its services at once) must not both run the same migration.
-  Transaction tx(db);
-  const int current = user_version(db);
-  if (current > schema_version()) refuse_newer(db, current);
-  for (int v = current; v < target; ++v) {
-    db.execute(kMigrations[static_cast<std::size_t>(v)]);
-    db.execute("PRAGMA user_version = " + std::to_string(v + 1));
-  }
-  auto violations = db.prepare("PRAGMA foreign_key_check");
-  if (violations.step()) {
-    throw Error(ErrorCode::kDataLoss, "database " + db.path() + ": table " +
-                                          violations.column_text(0) +
-                                          " has rows whose references are missing");
-  }
-  tx.commit();
+  // (the platform starts its services at once) must not both run the same migration. One
+  // of them may hold the lock for seconds (migration 4 copies every checkpoint): the
+  // others wait for it rather than fail to start.
+  with_retry(RetryPolicy{.budget = std::chrono::minutes(2)}, [&] {
+    Transaction tx(db);
+    const int current = user_version(db);
+    if (current > schema_version()) refuse_newer(db, current);
+    for (int v = current; v < target; ++v) {
+      db.execute(kMigrations[static_cast<std::size_t>(v)]);
+      db.execute("PRAGMA user_version = " + std::to_string(v + 1));
+    }
+    auto violations = db.prepare("PRAGMA foreign_key_check");
+    if (violations.step()) {
+      throw Error(ErrorCode::kDataLoss, "database " + db.path() + ": table " +
+                                            violations.column_text(0) +
+                                            " has rows whose references are missing");
+    }
+    tx.commit();
+  });
 }
 
 }  // namespace pnp::store

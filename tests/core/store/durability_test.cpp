@@ -283,5 +283,25 @@ TEST_F(StoreTest, RetentionKeepsTheLastBestPromotedAndReferencedCheckpoints) {
   EXPECT_EQ(store.collect_garbage({.keep_last = 2}).checkpoints_deleted, 0);
 }
 
+TEST_F(StoreTest, GarbageCollectionShrinksAFileCreatedWithoutIncrementalVacuum) {
+  {
+    sqlite3* raw = nullptr;  // as SQLite creates a file by default: auto_vacuum off
+    ASSERT_EQ(sqlite3_open(path_.c_str(), &raw), SQLITE_OK);
+    sqlite3_exec(raw, "PRAGMA journal_mode = WAL", nullptr, nullptr, nullptr);
+    sqlite3_close(raw);
+  }
+  RunStore store(path_);
+  EXPECT_EQ(store.database().pragma_int("auto_vacuum"), 0);
+  const auto run = store.create_run(spec());
+  const std::vector<std::uint8_t> blob(20000, 7);
+  for (int k = 1; k <= 30; ++k) store.save_checkpoint(run.id, 1000 * k, 0.5, blob);
+  const std::int64_t pages = store.database().pragma_int("page_count");
+  const GcReport report = store.collect_garbage({.keep_last = 1});
+  EXPECT_EQ(report.checkpoints_deleted, 29);
+  EXPECT_GT(report.pages_freed, pages / 2);
+  EXPECT_EQ(store.database().pragma_int("auto_vacuum"), 2) << "converted once";
+  EXPECT_EQ(store.checkpoints(run.id).size(), 1u);
+}
+
 }  // namespace
 }  // namespace pnp::store
