@@ -248,10 +248,16 @@ std::optional<double> RunManager::eta_s(std::int64_t run_id) const {
   return static_cast<double>(std::max(0LL, active_->max_steps - active_->steps)) / rate;
 }
 
-RunManager::Load RunManager::load() const {
+RunManager::Load RunManager::load() {
+  std::int64_t claimable = 0;
+  {
+    std::lock_guard lock(handler_mutex_);
+    claimable = handler_store_.count_claimable(options_.role, options_.owner);
+  }
   std::lock_guard lock(mutex_);
   Load load;
-  load.queued = queued_;
+  // The store's queue for this role, less the run this manager trains (which it owns).
+  load.queued = static_cast<std::size_t>(std::max<std::int64_t>(0, claimable - (active_ ? 1 : 0)));
   if (!active_) return load;
   load.active = active_->run_id;
   load.active_env_steps = active_->steps;
@@ -307,9 +313,6 @@ void RunManager::work(std::stop_token shutdown) {
           options_.retry,
           [&] { return store->claim_next(options_.role, options_.owner, options_.lease); },
           shutdown);
-      const auto waiting = store->count_claimable(options_.role, options_.owner);
-      std::lock_guard lock(mutex_);
-      queued_ = static_cast<std::size_t>(std::max<std::int64_t>(0, waiting - (claimed ? 1 : 0)));
       failures = 0;
     } catch (const std::exception& e) {
       if (shutdown.stop_requested()) return;

@@ -101,7 +101,7 @@ class RunManager {
     long long active_env_steps = 0;      // its training env steps so far
     double active_steps_per_s = 0;       // since it (re)started; 0 before its first report
   };
-  Load load() const;
+  Load load();
 
   // A counter bumped at every change to any run; wait_for_change returns when it differs
   // from `seen` or after `timeout`, with its current value.
@@ -138,7 +138,6 @@ class RunManager {
   std::condition_variable_any wake_cv_;
   mutable std::condition_variable change_cv_;
   bool woken_ = false;  // a run was created or cancelled since the worker last looked
-  std::size_t queued_ = 0;
   std::optional<Active> active_;
   std::uint64_t generation_ = 0;
 
