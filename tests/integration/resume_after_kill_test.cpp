@@ -9,6 +9,7 @@
 #include <sqlite3.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -17,6 +18,8 @@
 #include <vector>
 
 #include "pnp/train/v1/train_service.grpc.pb.h"
+#include "store/checkpoint_import.h"
+#include "store/run_store.h"
 #include "tests/integration/child_process.h"
 #include "tests/integration/store_reader.h"
 
@@ -413,6 +416,30 @@ TEST(RunOwnership, AStoreLockedForFifteenSecondsPausesARunWhichThenSucceeds) {
   const auto stopped = trainer.stop();
   ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
   expect_one_trainer(StoreReader(db), run_id);
+}
+
+// A checkpoint file imported into the store while a training server runs (a hierarchy
+// trained elsewhere, its file name with a quote) is listed beside the server's runs,
+// finished, and is never taken for a run to train.
+TEST(RunOwnership, AnImportedCheckpointIsListedAndNeverTrained) {
+  TempDir dir("import_listed");
+  Trainer trainer(dir, "train");
+  ASSERT_TRUE(trainer.started()) << trainer.process().diagnostics();
+  const std::filesystem::path file = dir.path() / "my \"best\" approach.ckpt";
+  std::filesystem::copy_file(PNP_SOURCE_DIR "/tests/data/panda_block/approach.ckpt", file);
+  {
+    pnp::store::RunStore store(dir.file("pnp.db"));
+    pnp::store::import_checkpoint(store, {"approach", "ddpg_her", "panda", "block", file}, false);
+  }
+  const auto runs = trainer.list();
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].state(), tv1::RUN_STATE_SUCCEEDED);
+  EXPECT_GT(runs[0].latest_checkpoint_id(), 0);
+  std::this_thread::sleep_for(500ms);  // two polls of the worker (lease 1 s / 4)
+  EXPECT_EQ(trainer.get(runs[0].run_id()).state(), tv1::RUN_STATE_SUCCEEDED);
+  EXPECT_EQ(trainer.get(runs[0].run_id()).env_steps(), 0) << "never trained";
+  const auto stopped = trainer.stop();
+  ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
 }
 
 }  // namespace
