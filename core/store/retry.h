@@ -9,8 +9,6 @@
 #include <chrono>
 #include <cstdint>
 #include <stop_token>
-#include <thread>
-#include <utility>
 
 #include "store/sqlite.h"
 

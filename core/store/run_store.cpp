@@ -400,6 +400,23 @@ std::vector<CheckpointInfo> RunStore::checkpoints(std::int64_t run_id) {
   return out;
 }
 
+namespace {
+
+// A promotion sets one checkpoint per role: two of one role in one call are refused.
+void require_one_per_role(const std::vector<CheckpointInfo>& infos, std::string_view field) {
+  for (std::size_t i = 0; i < infos.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (infos[j].role == infos[i].role) {
+        throw_invalid_argument(field, "at most one checkpoint per role",
+                               "checkpoints " + std::to_string(infos[j].id) + " and " +
+                                   std::to_string(infos[i].id) + ", both " + infos[i].role);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun> runs,
                                                     bool promote) {
   for (const FinishedRun& run : runs) {
@@ -418,14 +435,9 @@ std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun>
     infos.push_back(checkpoint_info(ids.back()));
   }
   if (promote) {
+    require_one_per_role(infos, "runs");
     const Millis now = now_ms();
-    for (std::size_t i = 0; i < infos.size(); ++i) {
-      for (std::size_t j = 0; j < i; ++j)
-        if (infos[j].role == infos[i].role)
-          throw_invalid_argument("runs", "at most one checkpoint per role to promote",
-                                 "two of role " + infos[i].role);
-      upsert_promotion(infos[i], now);
-    }
+    for (const CheckpointInfo& info : infos) upsert_promotion(info, now);
   }
   tx.commit();
   return ids;
@@ -444,15 +456,9 @@ std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoin
   if (checkpoint_ids.empty())
     throw_invalid_argument("checkpoint_ids", "at least one checkpoint id", "none");
   std::vector<CheckpointInfo> infos;
-  for (const std::int64_t id : checkpoint_ids) {
-    const CheckpointInfo info = load_checkpoint(id).info;  // never promote what cannot be served
-    for (const CheckpointInfo& earlier : infos)
-      if (earlier.role == info.role)
-        throw_invalid_argument("checkpoint_ids", "at most one checkpoint per role",
-                               "checkpoints " + std::to_string(earlier.id) + " and " +
-                                   std::to_string(id) + ", both " + info.role);
-    infos.push_back(info);
-  }
+  for (const std::int64_t id : checkpoint_ids)
+    infos.push_back(load_checkpoint(id).info);  // never promote what cannot be served
+  require_one_per_role(infos, "checkpoint_ids");
   Transaction tx(db_);
   const Millis now = now_ms();
   std::vector<Promotion> out;

@@ -2,9 +2,9 @@
 
 #include <chrono>
 #include <filesystem>
-#include <thread>
 
 #include "common/error.h"
+#include "store/retry.h"
 
 namespace pnp::store {
 namespace {
@@ -54,18 +54,14 @@ std::string first_text(sqlite3* db, const std::string& sql) {
 // answer is checked: a filesystem without shared memory keeps the old journal mode, and
 // the store would then silently lose WAL's concurrent reads.
 void enable_wal(sqlite3* db, std::chrono::milliseconds patience) {
-  const auto deadline = std::chrono::steady_clock::now() + patience;
-  for (;;) {
-    try {
-      const std::string mode = first_text(db, "PRAGMA journal_mode = WAL");
-      if (mode == "wal") return;
-      throw Error(ErrorCode::kFailedPrecondition,
-                  "store " + file_of(db) + ": journal_mode is \"" + mode +
-                      "\" where \"wal\" is needed: put the database on a local filesystem");
-    } catch (const BusyError&) {
-      if (std::chrono::steady_clock::now() >= deadline) throw;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const std::string mode = with_retry({.budget = patience,
+                                       .first_backoff = std::chrono::milliseconds(5),
+                                       .max_backoff = std::chrono::milliseconds(5)},
+                                      [&] { return first_text(db, "PRAGMA journal_mode = WAL"); });
+  if (mode != "wal") {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "store " + file_of(db) + ": journal_mode is \"" + mode +
+                    "\" where \"wal\" is needed: put the database on a local filesystem");
   }
 }
 
@@ -238,10 +234,6 @@ void Transaction::commit() {
   db_.execute("COMMIT");
   done_ = true;
 }
-
-}  // namespace pnp::store
-
-namespace pnp::store {
 
 ReadTransaction::ReadTransaction(Database& db)
     : db_(db), owns_(sqlite3_get_autocommit(db.handle()) != 0) {

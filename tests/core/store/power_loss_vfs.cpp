@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
+#include <string_view>
 
 namespace pnp::store::testing {
 namespace {
@@ -24,8 +25,7 @@ sqlite3_file* real(sqlite3_file* f) {
 }
 
 int x_close(sqlite3_file* f) {
-  const int rc = real(f)->pMethods ? real(f)->pMethods->xClose(real(f)) : SQLITE_OK;
-  return rc;
+  return real(f)->pMethods ? real(f)->pMethods->xClose(real(f)) : SQLITE_OK;
 }
 int x_read(sqlite3_file* f, void* buf, int n, sqlite3_int64 offset) {
   return real(f)->pMethods->xRead(real(f), buf, n, offset);
@@ -106,11 +106,11 @@ int x_open(sqlite3_vfs* vfs, const char* name, sqlite3_file* f, int flags, int* 
   file->base.pMethods = nullptr;
   file->owner = owner_of(vfs);
   file->real = reinterpret_cast<sqlite3_file*>(reinterpret_cast<char*>(f) + sizeof(File));
-  file->path[0] = '\0';
-  if (name && std::string(name).size() < sizeof(file->path)) {
-    std::string(name).copy(file->path, sizeof(file->path) - 1);
-    file->path[std::string(name).size()] = '\0';
-  }
+  // Files without a name (temporary ones) or with a longer one are not tracked.
+  const std::string_view path = name ? std::string_view(name) : std::string_view();
+  const std::size_t kept = path.size() < sizeof(file->path) ? path.size() : 0;
+  path.copy(file->path, kept);
+  file->path[kept] = '\0';
   const int rc =
       file->owner->real()->xOpen(file->owner->real(), name, file->real, flags, out_flags);
   if (rc == SQLITE_OK) file->base.pMethods = &kMethods;
