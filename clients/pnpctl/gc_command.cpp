@@ -2,14 +2,19 @@
 // maintenance tool beside the servers; they keep training and serving meanwhile, waiting
 // out its short write transaction).
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "clients/pnpctl/commands.h"
+#include "common/error.h"
 #include "store/run_store.h"
 
 namespace pnp::pnpctl {
 
 int gc_command(const std::string& db_path, int keep_last, bool json) {
+  // Never a new, empty store for a mistyped path.
+  if (!std::filesystem::is_regular_file(db_path))
+    throw_invalid_argument("--db", "an existing store file", "\"" + db_path + "\" (no such file)");
   store::RunStore store(db_path);
   const store::GcReport report = store.collect_garbage({.keep_last = keep_last});
   if (json) {

@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
   gc_cmd->add_option("--db", gc_db, "the SQLite store [$PNP_DB]")->envname("PNP_DB")->required();
   gc_cmd->add_option("--keep", gc_keep, "checkpoints kept per run besides those")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000));
   gc_cmd->add_flag("--json", gc_json, "machine-readable output");
   gc_cmd->callback([&] { command = [&] { return gc_command(gc_db, gc_keep, gc_json); }; });
 

@@ -76,11 +76,13 @@ int main(int argc, char** argv) {
   app.add_option("--run-lease-s", lease_s,
                  "a run whose server stops renewing its lease for this long is taken over by "
                  "another server of the role")
+      ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   int keep_checkpoints = pnp::store::RetentionPolicy{}.keep_last;
   app.add_option("--keep-checkpoints", keep_checkpoints,
                  "checkpoints kept per run besides its best, promoted and referenced ones (0: "
                  "keep all)")
+      ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
@@ -107,13 +109,6 @@ int main(int argc, char** argv) {
         return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object,
                                                                    world);
       };
-    }
-    if (!(lease_s >= 0.1 && lease_s <= 3600)) {
-      pnp::throw_invalid_argument("--run-lease-s", "0.1 to 3600 seconds", std::to_string(lease_s));
-    }
-    if (keep_checkpoints < 0) {
-      pnp::throw_invalid_argument("--keep-checkpoints", "0 (keep all) or more",
-                                  std::to_string(keep_checkpoints));
     }
     pnp::training::RunManagerOptions options{db, role, std::string(pnp::kCodeCommit), threads,
                                              environments};
