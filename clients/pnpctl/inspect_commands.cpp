@@ -88,7 +88,8 @@ int checkpoints_command(const Endpoints& endpoints, const std::string& role, std
   for (int i = 0; i < n; ++i) {
     const auto& c = response.checkpoints(i);
     table.add({std::to_string(c.checkpoint_id()), std::to_string(c.run_id()), short_name(c.role()),
-               std::to_string(c.env_steps()), fixed(c.eval_success(), 3),
+               std::to_string(c.env_steps()),
+               c.evaluated() ? fixed(c.eval_success(), 3) : "unevaluated",
                std::to_string(c.size_bytes()), i == n - 1 ? "latest" : ""});
   }
   csv ? table.print_csv(stdout) : table.print(stdout);

@@ -206,13 +206,11 @@ HlcTrainingOutput train_choreographer(
 
   TrainingResult result;
   StopTracker stop(config.stop);
-  const auto& resumed = config.control.resume_curve;
-  const double wall_offset = resumed.empty() ? 0.0 : resumed.back().wall_s;
   if (stop.resume(
-          resumed, [](const CurvePoint& p) { return p.task_success; }, result)) {
-    result.wall_s = wall_offset;
+          config.control, [](const CurvePoint& p) { return p.task_success; }, result)) {
     return {std::move(result), std::move(shared)};
   }
+  const double wall_offset = result.wall_s;
   // Tickets continue after a resumed run's episodes, so its new episodes are new seeds.
   const long long first_ticket = result.train_episodes;
   TicketGate gate;
@@ -276,6 +274,8 @@ HlcTrainingOutput train_choreographer(
         shared->normalizer().refresh();
         result.train_env_steps += episode.env_steps;
         ++result.train_episodes;
+        ++result.updates;  // one per applied episode
+        if (config.control.on_steps) config.control.on_steps(result.train_env_steps);
         ++sampled_episodes;
         sampled_successes += episode.success ? 1 : 0;
         if (result.train_env_steps >= next_eval) {
@@ -297,7 +297,7 @@ HlcTrainingOutput train_choreographer(
           point.env_steps = result.train_env_steps;
           point.episodes = result.train_episodes;
           point.wall_s = wall_offset + std::chrono::duration<double>(Clock::now() - start).count();
-          point.updates = first_ticket + ticket + 1;
+          point.updates = result.updates;
           point.eval_wall_s = result.eval_wall_s;
           while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
           point.stop_score = point.task_success;

@@ -115,22 +115,19 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
 
   TrainingResult result;
   StopTracker stop(config.stop);
-  const auto& resumed = config.control.resume_curve;
-  const double wall_offset = resumed.empty() ? 0.0 : resumed.back().wall_s;
   if (stop.resume(
-          resumed,
+          config.control,
           [&](const CurvePoint& p) { return expert_stop_score(p, config.subtask, end_to_end); },
           result)) {
-    result.wall_s = wall_offset;
     return {std::move(result), std::move(agent)};
   }
+  const bool resumed = !config.control.resume_curve.empty() || config.control.resume_counters;
+  const double wall_offset = result.wall_s;
   SampledBatch batch;
   std::vector<SubtaskEpisode> episodes(episodes_per_cycle);
   long long next_eval = config.stop.eval_interval_steps;
   while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
   double loss_sum_critic = 0, loss_sum_actor = 0;
-  // A resumed run counts on from its curve's last point, as its env steps do.
-  long long updates = resumed.empty() ? 0 : resumed.back().updates;
   long long updates_since_eval = 0;
   UpdateSchedule schedule(config.ddpg);
   const sim::ScriptedPolicy scripted;
@@ -141,7 +138,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
   const bool ddpg = config.algorithm == ExpertAlgorithm::kDdpgHer || end_to_end;
   SegmentReplay demo_replay(config.ddpg.buffer_size, objective, object_width);
   SampledBatch demo_batch;
-  if (ddpg && !end_to_end && config.ddpg.demo_episodes > 0 && !config.init && resumed.empty()) {
+  if (ddpg && !end_to_end && config.ddpg.demo_episodes > 0 && !config.init && !resumed) {
     const auto demos = static_cast<std::size_t>(config.ddpg.demo_episodes);
     std::vector<SubtaskEpisode> demo(demos);
     pool.parallel_for(demos, [&](std::size_t i) {
@@ -210,7 +207,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
         if (!ddpg) {  // behaviour cloning: regress the actor on the labelled actions
           replay.sample(config.ddpg.batch_size, 0.0, sample_rng, batch);
           loss_sum_actor += agent->behaviour_clone(batch);
-          ++updates;
+          ++result.updates;
           ++updates_since_eval;
           continue;
         }
@@ -221,11 +218,12 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
         const UpdateStats s = agent->update(batch, with_demos ? &demo_batch : nullptr);
         loss_sum_critic += s.critic_loss;
         loss_sum_actor += s.actor_loss;
-        ++updates;
+        ++result.updates;
         ++updates_since_eval;
       }
       if (ddpg) agent->update_targets(cycle_updates);
     }
+    if (config.control.on_steps) config.control.on_steps(result.train_env_steps);
     if (result.train_env_steps < next_eval) continue;
 
     // Evaluation on fresh, seeded episodes training never sees.
@@ -265,7 +263,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
         updates_since_eval ? loss_sum_critic / static_cast<double>(updates_since_eval) : 0;
     point.actor_loss =
         updates_since_eval ? loss_sum_actor / static_cast<double>(updates_since_eval) : 0;
-    point.updates = updates;
+    point.updates = result.updates;
     loss_sum_critic = loss_sum_actor = 0;
     updates_since_eval = 0;
     while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;

@@ -37,17 +37,39 @@ bool StopTracker::record(const CurvePoint& point, double score, TrainingResult& 
   return point.env_steps >= rule_.max_steps;
 }
 
-bool StopTracker::resume(const std::vector<CurvePoint>& curve,
+bool StopTracker::resume(const TrainingControl& control,
                          const std::function<double(const CurvePoint&)>& score,
                          TrainingResult& result) {
+  const auto& curve = control.resume_curve;
   bool done = false;
   for (const CurvePoint& point : curve) done = record(point, score(point), result);
-  if (!curve.empty()) {
-    result.train_env_steps = curve.back().env_steps;
-    result.train_episodes = curve.back().episodes;
-    result.eval_wall_s = curve.back().eval_wall_s;
+  TrainingCounters at;
+  if (!curve.empty()) at = counters_of(curve.back());
+  if (control.resume_counters) {
+    if (control.resume_counters->env_steps < at.env_steps ||
+        control.resume_counters->episodes < at.episodes) {
+      throw_invalid_argument(
+          "resume_counters",
+          "at or after the curve's last point (" + std::to_string(at.env_steps) + " steps)",
+          std::to_string(control.resume_counters->env_steps) + " steps");
+    }
+    at = *control.resume_counters;
   }
+  result.train_env_steps = at.env_steps;
+  result.train_episodes = at.episodes;
+  result.updates = at.updates;
+  result.wall_s = at.wall_s;
+  result.eval_wall_s = at.eval_wall_s;
   return done;
+}
+
+TrainingCounters counters_of(const CurvePoint& point) {
+  return {point.env_steps, point.episodes, point.updates, point.wall_s, point.eval_wall_s};
+}
+
+TrainingCounters counters_of(const TrainingResult& result) {
+  return {result.train_env_steps, result.train_episodes, result.updates, result.wall_s,
+          result.eval_wall_s};
 }
 
 double wall_to_target(const TrainingResult& result) {

@@ -7,6 +7,7 @@
 // that model consumed.
 
 #include <functional>
+#include <optional>
 #include <stop_token>
 #include <string>
 #include <vector>
@@ -30,6 +31,17 @@ struct CurvePoint {
   double actor_loss = 0;
   long long updates = 0;
 };
+
+// Where a trainer's counters stand: at an evaluation (its curve point), or at the moment
+// it stopped between evaluations (weights saved at a shutdown or a cancel).
+struct TrainingCounters {
+  long long env_steps = 0;
+  long long episodes = 0;
+  long long updates = 0;
+  double wall_s = 0;       // since the run started, evaluation included
+  double eval_wall_s = 0;  // of which evaluation
+};
+TrainingCounters counters_of(const CurvePoint& point);
 
 struct StopRule {
   long long max_steps = 200'000;
@@ -57,11 +69,14 @@ struct TrainingResult {
   double final_score = 0;          // last evaluation: the stop rule's score
   long long train_env_steps = 0;
   long long train_episodes = 0;
+  long long updates = 0;
   long long eval_env_steps = 0;  // spent on evaluation: not counted in training
   double wall_s = 0;             // everything
   double eval_wall_s = 0;        // of which evaluation
   std::vector<CurvePoint> curve;
 };
+// The counters the result ends with: what a run stopped between evaluations resumes from.
+TrainingCounters counters_of(const TrainingResult& result);
 
 // What a caller outside the trainer controls: cancellation, and resuming a run that was
 // interrupted (by a crash or a restart) from its last checkpoint.
@@ -75,16 +90,24 @@ struct TrainingControl {
   // episodes continue the run's seed sequence. The replay buffer and optimiser moments
   // are not checkpointed: they refill and re-adapt (docs/LEARNING.md).
   std::vector<CurvePoint> resume_curve;
+  // Set when the weights passed as init were saved after the curve's last point (the run
+  // stopped between evaluations): the counters continue from these instead.
+  std::optional<TrainingCounters> resume_counters;
+  // After every round of rollouts and updates, with the training steps so far: a live
+  // gauge between evaluations. Called from the training thread; keep it cheap.
+  std::function<void(long long env_steps)> on_steps;
 };
 
 // Tracks consecutive successes; returns true when training should stop.
 class StopTracker {
  public:
   explicit StopTracker(const StopRule& rule) : rule_(rule) {}
-  // Replays a resumed run's curve; `score` maps a point to what must reach the target.
-  // Returns true if that curve already met the stop rule.
-  bool resume(const std::vector<CurvePoint>& curve,
-              const std::function<double(const CurvePoint&)>& score, TrainingResult& result);
+  // Replays a resumed run's curve and sets the result's counters to where it stopped
+  // (control.resume_counters, else the curve's last point); `score` maps a point to what
+  // must reach the target. Returns true if that curve already met the stop rule.
+  // INVALID_ARGUMENT if the counters are behind the curve.
+  bool resume(const TrainingControl& control, const std::function<double(const CurvePoint&)>& score,
+              TrainingResult& result);
   // `score` is what must reach the target (task success, or for a subtask expert the
   // lower of task and subtask success).
   bool record(const CurvePoint& point, double score, TrainingResult& result);

@@ -68,15 +68,26 @@ struct MetricPoint {
   std::optional<double> stop_score{};
 };
 
+// Where a trainer stood when it saved weights between evaluations (stopped by a shutdown
+// or a cancel): what it resumes its counters from. The step count is the checkpoint's.
+struct TrainerCounters {
+  long long episodes = 0;
+  long long updates = 0;
+  double wall_s = 0;
+  double eval_wall_s = 0;
+};
+
 struct CheckpointInfo {
   std::int64_t id = 0;
   std::int64_t run_id = 0;
   std::string role;
   long long env_steps = 0;
-  double eval_success = 0;
-  std::string checksum;  // FNV-1a 64 of the blob, hex
+  double eval_success = 0;  // of the evaluation at env_steps; 0 if never evaluated
+  std::string checksum;     // FNV-1a 64 of the blob, hex
   std::int64_t size_bytes = 0;
   Millis created_ms = 0;
+  // Set for weights saved between evaluations: never evaluated themselves.
+  std::optional<TrainerCounters> unevaluated{};
 };
 
 struct Checkpoint {

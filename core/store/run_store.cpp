@@ -42,7 +42,8 @@ RunRecord read_run(const Statement& st) {
 }
 
 constexpr const char* kCheckpointColumns =
-    "id, run_id, role, env_steps, eval_success, checksum, size_bytes, created_ms";
+    "id, run_id, role, env_steps, eval_success, checksum, size_bytes, created_ms, episodes, "
+    "updates, wall_s, eval_wall_s";
 
 CheckpointInfo read_checkpoint_info(const Statement& st) {
   CheckpointInfo c;
@@ -54,6 +55,10 @@ CheckpointInfo read_checkpoint_info(const Statement& st) {
   c.checksum = st.column_text(5);
   c.size_bytes = st.column_int(6);
   c.created_ms = st.column_int(7);
+  if (!st.is_null(8)) {
+    c.unevaluated = TrainerCounters{st.column_int(8), st.column_int(9), st.column_double(10),
+                                    st.column_double(11)};
+  }
   return c;
 }
 
@@ -333,6 +338,33 @@ CheckpointInfo RunStore::save_checkpoint(std::int64_t run_id, long long env_step
   return checkpoint_info(id);
 }
 
+CheckpointInfo RunStore::save_unevaluated(std::int64_t run_id, long long env_steps,
+                                          const TrainerCounters& counters,
+                                          std::span<const std::uint8_t> blob,
+                                          const std::string& owner) {
+  if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
+  if (counters.episodes < 0 || counters.updates < 0 || !(counters.wall_s >= 0) ||
+      !(counters.eval_wall_s >= 0)) {
+    throw_invalid_argument("counters", "non-negative episodes, updates and times",
+                           std::to_string(counters.episodes) + " episodes, " +
+                               std::to_string(counters.updates) + " updates");
+  }
+  Transaction tx(db_);
+  const RunRecord run = get_run(run_id);
+  require_owner(run, owner, "take checkpoints");
+  const std::int64_t id = insert_checkpoint(run, env_steps, 0, blob);
+  auto st = db_.prepare(
+      "UPDATE checkpoints SET episodes = ?, updates = ?, wall_s = ?, eval_wall_s = ? WHERE id = ?");
+  st.bind(1, static_cast<std::int64_t>(counters.episodes))
+      .bind(2, static_cast<std::int64_t>(counters.updates))
+      .bind(3, counters.wall_s)
+      .bind(4, counters.eval_wall_s)
+      .bind(5, id);
+  st.run();
+  tx.commit();
+  return checkpoint_info(id);
+}
+
 std::int64_t RunStore::insert_checkpoint(const RunRecord& run, long long env_steps,
                                          double eval_success, std::span<const std::uint8_t> blob) {
   auto st = db_.prepare(
@@ -501,7 +533,8 @@ constexpr const char* kKeptCheckpoints = R"sql(
 SELECT id FROM (SELECT id, ROW_NUMBER() OVER (PARTITION BY run_id
                 ORDER BY env_steps DESC, id DESC) AS rank FROM checkpoints) WHERE rank <= ?1
 UNION SELECT id FROM (SELECT id, ROW_NUMBER() OVER (PARTITION BY run_id
-                ORDER BY eval_success DESC, env_steps DESC, id DESC) AS rank FROM checkpoints)
+                ORDER BY eval_success DESC, env_steps DESC, id DESC) AS rank FROM checkpoints
+                WHERE episodes IS NULL)
       WHERE rank = 1
 UNION SELECT checkpoint_id FROM promotions
 UNION SELECT parent_checkpoint_id FROM runs WHERE parent_checkpoint_id IS NOT NULL

@@ -38,8 +38,8 @@ struct FinishedRun {
 };
 
 // Which checkpoints retention keeps besides the last `keep_last` of each run: the run's
-// best (highest evaluated success, the later one on a tie), every promoted one, and every
-// one another run starts from (parent or expert). Nothing else is kept.
+// best (highest evaluated success, the later one on a tie; unevaluated ones never), every promoted
+// one, and every one another run starts from (parent or expert). Nothing else is kept.
 struct RetentionPolicy {
   int keep_last = 3;
 };
@@ -89,6 +89,12 @@ class RunStore {
 
   CheckpointInfo save_checkpoint(std::int64_t run_id, long long env_steps, double eval_success,
                                  std::span<const std::uint8_t> blob, const std::string& owner = "");
+  // Weights saved between evaluations (a trainer stopped by a shutdown or a cancel) with
+  // the counters it resumes from. Never counted as the run's best.
+  CheckpointInfo save_unevaluated(std::int64_t run_id, long long env_steps,
+                                  const TrainerCounters& counters,
+                                  std::span<const std::uint8_t> blob,
+                                  const std::string& owner = "");
   // An evaluation and the checkpoint it evaluated, in one transaction: a resumed run finds
   // its curve and its weights at the same step.
   CheckpointInfo record_evaluation(std::int64_t run_id, const MetricPoint& point,

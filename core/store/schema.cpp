@@ -11,7 +11,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 4> kMigrations{
+constexpr std::array<std::string_view, 5> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -137,6 +137,15 @@ INSERT INTO checkpoints_v4 SELECT id, run_id, role, env_steps, eval_success, che
 DROP TABLE checkpoints;
 ALTER TABLE checkpoints_v4 RENAME TO checkpoints;
 CREATE INDEX checkpoints_by_run ON checkpoints (run_id, env_steps, id);
+)sql",
+    // 5: weights saved between evaluations (a trainer stopped by a shutdown or a cancel)
+    // carry the counters it resumes from; NULL for an evaluated checkpoint, whose counters
+    // are its evaluation's.
+    R"sql(
+ALTER TABLE checkpoints ADD COLUMN episodes INTEGER;
+ALTER TABLE checkpoints ADD COLUMN updates INTEGER;
+ALTER TABLE checkpoints ADD COLUMN wall_s REAL;
+ALTER TABLE checkpoints ADD COLUMN eval_wall_s REAL;
 )sql",
 };
 

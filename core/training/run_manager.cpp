@@ -405,6 +405,37 @@ RunManager::Turn RunManager::finish(store::RunStore& store, std::int64_t run_id,
   }
 }
 
+void RunManager::save_final_weights(store::RunStore& store, std::int64_t run_id,
+                                    const TrainingOutcome& outcome, long long start_steps) {
+  const rl::TrainingResult& result = outcome.result;
+  const long long evaluated = result.curve.empty() ? 0 : result.curve.back().env_steps;
+  // Nothing trained since the last checkpoint (the trainer stopped at an evaluation, or
+  // before its first round): that checkpoint already holds these weights.
+  if (result.train_env_steps <= std::max(evaluated, start_steps)) return;
+  try {
+    // One attempt plus the connection's busy timeout: a shutdown does not wait out the
+    // retry budget, and losing these weights costs at most one evaluation interval.
+    const auto saved = store.save_unevaluated(
+        run_id, result.train_env_steps,
+        {result.train_episodes, result.updates, result.wall_s, result.eval_wall_s},
+        outcome.checkpoint, options_.owner);
+    report("run " + std::to_string(run_id) + ": stopped at " +
+           std::to_string(result.train_env_steps) + " steps; its weights are checkpoint " +
+           std::to_string(saved.id));
+  } catch (const std::exception& e) {
+    report("run " + std::to_string(run_id) + ": its final weights (" +
+           std::to_string(result.train_env_steps) + " steps) were not saved: " + e.what() +
+           "; it resumes from its last evaluation");
+    return;
+  }
+  if (!options_.retention) return;
+  try {
+    store.prune_checkpoints(run_id, *options_.retention);
+  } catch (const std::exception& e) {  // the next evaluation, or pnpctl gc, prunes it
+    report("run " + std::to_string(run_id) + ": retention deferred: " + e.what());
+  }
+}
+
 RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecord& run,
                                    std::stop_token run_stop, const std::stop_token& shutdown) {
   const std::int64_t run_id = run.id;
@@ -435,10 +466,17 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
       }
       for (const auto& m : store.metrics(run_id))
         if (m.env_steps <= c->env_steps) hooks.control.resume_curve.push_back(to_curve_point(m));
+      if (c->unevaluated) {  // saved when the trainer last stopped, between evaluations
+        const store::TrainerCounters& at = *c->unevaluated;
+        hooks.control.resume_counters =
+            rl::TrainingCounters{c->env_steps, at.episodes, at.updates, at.wall_s, at.eval_wall_s};
+      }
       break;
     }
     const long long start_steps =
-        hooks.control.resume_curve.empty() ? 0 : hooks.control.resume_curve.back().env_steps;
+        hooks.control.resume_counters        ? hooks.control.resume_counters->env_steps
+        : hooks.control.resume_curve.empty() ? 0
+                                             : hooks.control.resume_curve.back().env_steps;
     {
       std::lock_guard lock(mutex_);
       active_->started = Clock::now();
@@ -452,6 +490,10 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
     std::stop_callback on_cancel(run_stop, [&] { trainer_stop.request_stop(); });
     std::stop_callback on_shutdown(shutdown, [&] { trainer_stop.request_stop(); });
     hooks.control.stop = trainer_stop.get_token();
+    hooks.control.on_steps = [&](long long env_steps) {
+      std::lock_guard lock(mutex_);
+      active_->steps = env_steps;
+    };
     hooks.on_evaluation = [&](const rl::CurvePoint& p, const Blob& checkpoint) {
       store::with_retry(
           options_.retry,
@@ -480,6 +522,7 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
     }
     if (lost()) return Turn::kFinished;  // cancelled elsewhere or taken over
     if (outcome.result.cancelled) {
+      save_final_weights(store, run_id, outcome, start_steps);
       if (cancel_requested) return finish(store, run_id, store::RunState::kCancelled, "", shutdown);
       return Turn::kReleased;  // shut down
     }

@@ -12,7 +12,8 @@
 // While it trains, every evaluation is written with the checkpoint it evaluated in one
 // transaction, by its owner only. A busy database pauses a run (retried with backoff,
 // then the run goes back to the queue) instead of failing it; FAILED is for errors of the
-// training itself.
+// training itself. A trainer stopped between evaluations (a clean shutdown, a cancel)
+// leaves its weights as one more checkpoint, and the run resumes from them.
 
 #include <chrono>
 #include <condition_variable>
@@ -124,6 +125,9 @@ class RunManager {
   void heartbeat(std::stop_token shutdown);
   Turn train(store::RunStore& store, const store::RunRecord& run, std::stop_token run_stop,
              const std::stop_token& shutdown);
+  // Keeps the weights of a trainer stopped between evaluations (shutdown or cancel).
+  void save_final_weights(store::RunStore& store, std::int64_t run_id,
+                          const TrainingOutcome& outcome, long long start_steps);
   Turn finish(store::RunStore& store, std::int64_t run_id, store::RunState state,
               const std::string& error, const std::stop_token& shutdown);
   void sleep_until_woken(std::chrono::milliseconds timeout, const std::stop_token& shutdown);

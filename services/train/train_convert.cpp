@@ -168,6 +168,7 @@ void to_proto(const store::CheckpointInfo& c, train::v1::Checkpoint& out) {
   out.set_role(role_from_name(c.role));
   out.set_env_steps(c.env_steps);
   out.set_eval_success(c.eval_success);
+  out.set_evaluated(!c.unevaluated.has_value());
   out.set_checksum(c.checksum);
   out.set_size_bytes(c.size_bytes);
   set_millis(c.created_ms, *out.mutable_create_time());

@@ -325,6 +325,58 @@ TEST(StopTracker, StepsToTargetAreThoseOfTheConfirmingEvaluation) {
   EXPECT_EQ(result.final_score, 0.91);
 }
 
+TEST(StopTracker, AResumedRunCountsOnFromWhereItStopped) {
+  StopRule rule;
+  rule.target_success = 0.9;
+  CurvePoint evaluated;
+  evaluated.env_steps = 1000;
+  evaluated.episodes = 20;
+  evaluated.updates = 400;
+  evaluated.wall_s = 5;
+  evaluated.eval_wall_s = 1;
+  evaluated.task_success = 0.95;
+  TrainingControl control;
+  control.resume_curve = {evaluated};
+  {  // stopped at its evaluation: the counters are the curve's last point
+    StopTracker tracker(rule);
+    TrainingResult result;
+    EXPECT_FALSE(tracker.resume(
+        control, [](const CurvePoint& p) { return p.task_success; }, result));
+    EXPECT_EQ(result.train_env_steps, 1000);
+    EXPECT_EQ(result.train_episodes, 20);
+    EXPECT_EQ(result.updates, 400);
+    EXPECT_EQ(result.wall_s, 5);
+    EXPECT_EQ(result.curve.size(), 1u);
+  }
+  // Stopped between evaluations: the counters saved with its weights, and the streak of
+  // the curve still counts (one more success reaches the target).
+  control.resume_counters = TrainingCounters{1450, 29, 580, 7.5, 1};
+  StopTracker tracker(rule);
+  TrainingResult result;
+  EXPECT_FALSE(tracker.resume(
+      control, [](const CurvePoint& p) { return p.task_success; }, result));
+  EXPECT_EQ(result.train_env_steps, 1450);
+  EXPECT_EQ(result.train_episodes, 29);
+  EXPECT_EQ(result.updates, 580);
+  EXPECT_EQ(result.wall_s, 7.5);
+  CurvePoint next;
+  next.env_steps = 2000;
+  EXPECT_TRUE(tracker.record(next, 0.92, result));
+  EXPECT_EQ(result.steps_to_target, 2000);
+  // Counters behind the curve are refused, naming them.
+  control.resume_counters = TrainingCounters{900, 29, 580, 7.5, 1};
+  StopTracker behind(rule);
+  TrainingResult refused;
+  try {
+    behind.resume(
+        control, [](const CurvePoint& p) { return p.task_success; }, refused);
+    ADD_FAILURE() << "counters behind the curve were accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("resume_counters"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SubtaskTraining, OnlineBehaviourCloningLearnsTheApproachExpert) {
   const SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kBcOnline, 2, 3000);
   const auto out = train_subtask_expert(

@@ -283,6 +283,40 @@ TEST_F(StoreTest, RetentionKeepsTheLastBestPromotedAndReferencedCheckpoints) {
   EXPECT_EQ(store.collect_garbage({.keep_last = 2}).checkpoints_deleted, 0);
 }
 
+TEST_F(StoreTest, WeightsSavedBetweenEvaluationsKeepTheirCountersAndAreNeverTheBest) {
+  RunStore store(path_);
+  const auto run = store.create_run(spec());
+  ASSERT_TRUE(store.claim_next("approach", "a", 10s));
+  const auto evaluated = store.save_checkpoint(run.id, 1000, 0.0, kBlob, "a");
+  EXPECT_FALSE(evaluated.unevaluated);
+  EXPECT_EQ(code_of([&] {
+              store.save_unevaluated(run.id, 1500, {30, 600, 9, 2}, kBlob, "b");
+            }),
+            ErrorCode::kAborted)
+      << "only the run's owner saves its weights";
+  EXPECT_EQ(code_of([&] {
+              store.save_unevaluated(run.id, 1500, {-1, 600, 9, 2}, kBlob, "a");
+            }),
+            ErrorCode::kInvalidArgument);
+  const auto stopped = store.save_unevaluated(run.id, 1500, {30, 600, 9.5, 2.25}, kBlob, "a");
+  const CheckpointInfo latest = *store.latest_checkpoint(run.id);
+  EXPECT_EQ(latest.id, stopped.id);
+  EXPECT_EQ(latest.env_steps, 1500);
+  ASSERT_TRUE(latest.unevaluated);
+  EXPECT_EQ(latest.unevaluated->episodes, 30);
+  EXPECT_EQ(latest.unevaluated->updates, 600);
+  EXPECT_EQ(latest.unevaluated->wall_s, 9.5);
+  EXPECT_EQ(latest.unevaluated->eval_wall_s, 2.25);
+  EXPECT_EQ(store.load_checkpoint(stopped.id).blob, kBlob);
+  // Retention: the evaluated checkpoint stays the run's best although the unevaluated ones
+  // tie with it (success 0) and are later; keep_last 1 keeps the latest.
+  store.save_unevaluated(run.id, 1600, {31, 610, 10, 2.25}, kBlob, "a");
+  store.prune_checkpoints(run.id, {.keep_last = 1});
+  std::set<std::int64_t> left;
+  for (const auto& c : store.checkpoints(run.id)) left.insert(c.id);
+  EXPECT_EQ(left, (std::set<std::int64_t>{evaluated.id, store.latest_checkpoint(run.id)->id}));
+}
+
 TEST_F(StoreTest, GarbageCollectionShrinksAFileCreatedWithoutIncrementalVacuum) {
   {
     sqlite3* raw = nullptr;  // as SQLite creates a file by default: auto_vacuum off

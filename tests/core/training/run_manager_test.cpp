@@ -217,6 +217,47 @@ TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
   EXPECT_GT(after[before.size()].episodes, before.back().episodes);
 }
 
+TEST(RunManager, AShutdownOrACancelBetweenEvaluationsKeepsTheTrainersFinalWeights) {
+  ScratchDir dir("run_manager_final_weights");
+  const std::string db = dir.file("pnp.db");
+  TrainingSpec spec = small_spec("approach", 1'000'000);
+  spec.stop.eval_interval_steps = 500'000;  // no evaluation before it is stopped
+  std::int64_t id = 0;
+  {
+    RunManager first({db, "approach", "test", 1});
+    id = first.create(spec, {}).id;
+    wait_until(first, [&] { return first.load().active_env_steps > 0; });
+  }  // shut down after at least one round of training
+  store::CheckpointInfo saved;
+  {
+    store::RunStore store(db);
+    EXPECT_EQ(store.get_run(id).state, store::RunState::kRunning);
+    EXPECT_TRUE(store.metrics(id).empty());
+    const auto checkpoints = store.checkpoints(id);
+    ASSERT_EQ(checkpoints.size(), 1u) << "the weights at shutdown";
+    saved = checkpoints.front();
+  }
+  ASSERT_TRUE(saved.unevaluated);
+  EXPECT_GT(saved.env_steps, 0);
+  EXPECT_GT(saved.unevaluated->episodes, 0);
+  EXPECT_GT(saved.unevaluated->updates, 0);
+  RunManager second({db, "approach", "test", 1});
+  // It resumes from those weights and counters, not from scratch.
+  wait_until(second, [&] { return second.load().active_env_steps > saved.env_steps; });
+  second.cancel(id);
+  wait_until(second, [&] { return store::is_terminal(second.get(id).state); });
+  EXPECT_EQ(second.get(id).state, store::RunState::kCancelled);
+  const auto checkpoints = second.checkpoints(id);
+  ASSERT_EQ(checkpoints.size(), 2u) << "and a cancel keeps the weights it stopped with";
+  const store::CheckpointInfo& cancelled = checkpoints.back();
+  EXPECT_EQ(checkpoints.front().id, saved.id);
+  ASSERT_TRUE(cancelled.unevaluated);
+  EXPECT_GT(cancelled.env_steps, saved.env_steps);
+  EXPECT_GT(cancelled.unevaluated->episodes, saved.unevaluated->episodes);
+  EXPECT_GT(cancelled.unevaluated->updates, saved.unevaluated->updates);
+  EXPECT_GT(cancelled.unevaluated->wall_s, saved.unevaluated->wall_s);
+}
+
 TEST(RunManager, ADamagedLastCheckpointIsPassedOverForTheOneBeforeIt) {
   ScratchDir dir("run_manager_damaged");
   const std::string db = dir.file("pnp.db");
