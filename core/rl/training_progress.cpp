@@ -67,11 +67,6 @@ TrainingCounters counters_of(const CurvePoint& point) {
   return {point.env_steps, point.episodes, point.updates, point.wall_s, point.eval_wall_s};
 }
 
-TrainingCounters counters_of(const TrainingResult& result) {
-  return {result.train_env_steps, result.train_episodes, result.updates, result.wall_s,
-          result.eval_wall_s};
-}
-
 double wall_to_target(const TrainingResult& result) {
   for (const CurvePoint& p : result.curve) {
     if (result.reached && p.env_steps == result.steps_to_target) return p.wall_s - p.eval_wall_s;

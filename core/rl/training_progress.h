@@ -75,8 +75,6 @@ struct TrainingResult {
   double eval_wall_s = 0;        // of which evaluation
   std::vector<CurvePoint> curve;
 };
-// The counters the result ends with: what a run stopped between evaluations resumes from.
-TrainingCounters counters_of(const TrainingResult& result);
 
 // What a caller outside the trainer controls: cancellation, and resuming a run that was
 // interrupted (by a crash or a restart) from its last checkpoint.

@@ -329,47 +329,43 @@ std::vector<MetricPoint> RunStore::metrics_after(std::int64_t run_id, long long 
 CheckpointInfo RunStore::save_checkpoint(std::int64_t run_id, long long env_steps,
                                          double eval_success, std::span<const std::uint8_t> blob,
                                          const std::string& owner) {
-  if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
-  Transaction tx(db_);
-  const RunRecord run = get_run(run_id);
-  require_owner(run, owner, "take checkpoints");
-  const std::int64_t id = insert_checkpoint(run, env_steps, eval_success, blob);
-  tx.commit();
-  return checkpoint_info(id);
+  return save_owned_checkpoint(run_id, env_steps, eval_success, blob, owner, nullptr);
 }
 
 CheckpointInfo RunStore::save_unevaluated(std::int64_t run_id, long long env_steps,
                                           const TrainerCounters& counters,
                                           std::span<const std::uint8_t> blob,
                                           const std::string& owner) {
-  if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   if (counters.episodes < 0 || counters.updates < 0 || !(counters.wall_s >= 0) ||
       !(counters.eval_wall_s >= 0)) {
     throw_invalid_argument("counters", "non-negative episodes, updates and times",
                            std::to_string(counters.episodes) + " episodes, " +
                                std::to_string(counters.updates) + " updates");
   }
+  return save_owned_checkpoint(run_id, env_steps, 0, blob, owner, &counters);
+}
+
+CheckpointInfo RunStore::save_owned_checkpoint(std::int64_t run_id, long long env_steps,
+                                               double eval_success,
+                                               std::span<const std::uint8_t> blob,
+                                               const std::string& owner,
+                                               const TrainerCounters* unevaluated) {
+  if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   Transaction tx(db_);
   const RunRecord run = get_run(run_id);
   require_owner(run, owner, "take checkpoints");
-  const std::int64_t id = insert_checkpoint(run, env_steps, 0, blob);
-  auto st = db_.prepare(
-      "UPDATE checkpoints SET episodes = ?, updates = ?, wall_s = ?, eval_wall_s = ? WHERE id = ?");
-  st.bind(1, static_cast<std::int64_t>(counters.episodes))
-      .bind(2, static_cast<std::int64_t>(counters.updates))
-      .bind(3, counters.wall_s)
-      .bind(4, counters.eval_wall_s)
-      .bind(5, id);
-  st.run();
+  const std::int64_t id = insert_checkpoint(run, env_steps, eval_success, blob, unevaluated);
   tx.commit();
   return checkpoint_info(id);
 }
 
 std::int64_t RunStore::insert_checkpoint(const RunRecord& run, long long env_steps,
-                                         double eval_success, std::span<const std::uint8_t> blob) {
+                                         double eval_success, std::span<const std::uint8_t> blob,
+                                         const TrainerCounters* unevaluated) {
   auto st = db_.prepare(
       "INSERT INTO checkpoints (run_id, role, env_steps, eval_success, checksum, size_bytes, "
-      "blob, created_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+      "blob, created_ms, episodes, updates, wall_s, eval_wall_s) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   st.bind(1, run.id)
       .bind(2, run.spec.role)
       .bind(3, static_cast<std::int64_t>(env_steps))
@@ -378,6 +374,14 @@ std::int64_t RunStore::insert_checkpoint(const RunRecord& run, long long env_ste
       .bind(6, static_cast<std::int64_t>(blob.size()))
       .bind_blob(7, blob)
       .bind(8, now_ms());
+  if (unevaluated) {
+    st.bind(9, static_cast<std::int64_t>(unevaluated->episodes))
+        .bind(10, static_cast<std::int64_t>(unevaluated->updates))
+        .bind(11, unevaluated->wall_s)
+        .bind(12, unevaluated->eval_wall_s);
+  } else {
+    st.bind_null(9).bind_null(10).bind_null(11).bind_null(12);
+  }
   st.run();
   return db_.last_insert_id();
 }

@@ -130,8 +130,14 @@ class RunStore {
   void require_owner(const RunRecord& run, const std::string& owner, std::string_view action);
   void insert_metric(std::int64_t run_id, const MetricPoint& point, bool reached,
                      std::optional<long long> steps_to_target, const std::string& owner);
+  CheckpointInfo save_owned_checkpoint(std::int64_t run_id, long long env_steps,
+                                       double eval_success, std::span<const std::uint8_t> blob,
+                                       const std::string& owner,
+                                       const TrainerCounters* unevaluated);
+  // `unevaluated` null: an evaluated checkpoint (no counters of its own).
   std::int64_t insert_checkpoint(const RunRecord& run, long long env_steps, double eval_success,
-                                 std::span<const std::uint8_t> blob);
+                                 std::span<const std::uint8_t> blob,
+                                 const TrainerCounters* unevaluated = nullptr);
   std::int64_t insert_run(const RunSpec& spec, RunState state);
   void upsert_promotion(const CheckpointInfo& info, Millis now);
   GcReport prune_where(std::string_view run_condition, std::optional<std::int64_t> run_id,
