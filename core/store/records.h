@@ -99,6 +99,19 @@ struct Promotion {
   std::string role;
   std::int64_t checkpoint_id = 0;
   Millis promoted_ms = 0;
+  std::string promoted_by{};  // the authorized principal; empty without an auth policy
+};
+
+// One call of an operator or robot RPC (security/rpc_access.h), as the audit trail keeps it.
+struct AuditRecord {
+  std::int64_t id = 0;
+  Millis ts_ms = 0;
+  std::string service;    // inference, train-approach, robot-sim...
+  std::string principal;  // empty: no auth policy configured
+  std::string peer;       // the caller's address as gRPC saw it
+  std::string rpc;        // full method path
+  std::string request;    // the first request message as JSON, cut at 2 KB
+  std::string code;       // the final status: OK, PERMISSION_DENIED...
 };
 
 }  // namespace pnp::store

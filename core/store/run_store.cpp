@@ -473,22 +473,23 @@ std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun>
   if (promote) {
     require_one_per_role(infos, "runs");
     const Millis now = now_ms();
-    for (const CheckpointInfo& info : infos) upsert_promotion(info, now);
+    for (const CheckpointInfo& info : infos) upsert_promotion(info, now, "");
   }
   tx.commit();
   return ids;
 }
 
-void RunStore::upsert_promotion(const CheckpointInfo& info, Millis now) {
+void RunStore::upsert_promotion(const CheckpointInfo& info, Millis now, const std::string& by) {
   auto st = db_.prepare(
-      "INSERT INTO promotions (role, checkpoint_id, promoted_ms) VALUES (?, ?, ?) "
+      "INSERT INTO promotions (role, checkpoint_id, promoted_ms, promoted_by) VALUES (?, ?, ?, ?) "
       "ON CONFLICT (role) DO UPDATE SET checkpoint_id = excluded.checkpoint_id, "
-      "promoted_ms = excluded.promoted_ms");
-  st.bind(1, info.role).bind(2, info.id).bind(3, now);
+      "promoted_ms = excluded.promoted_ms, promoted_by = excluded.promoted_by");
+  st.bind(1, info.role).bind(2, info.id).bind(3, now).bind(4, by);
   st.run();
 }
 
-std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoint_ids) {
+std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoint_ids,
+                                         const std::string& by) {
   if (checkpoint_ids.empty())
     throw_invalid_argument("checkpoint_ids", "at least one checkpoint id", "none");
   std::vector<CheckpointInfo> infos;
@@ -500,31 +501,34 @@ std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoin
   std::vector<Promotion> out;
   for (const CheckpointInfo& info : infos) {
     checkpoint_info(info.id);  // NOT_FOUND if deleted since it was verified
-    upsert_promotion(info, now);
-    out.push_back({info.role, info.id, now});
+    upsert_promotion(info, now, by);
+    out.push_back({info.role, info.id, now, by});
   }
   tx.commit();
   return out;
 }
 
-Promotion RunStore::promote(std::int64_t checkpoint_id) {
-  return promote(std::span<const std::int64_t>(&checkpoint_id, 1)).front();
+Promotion RunStore::promote(std::int64_t checkpoint_id, const std::string& by) {
+  return promote(std::span<const std::int64_t>(&checkpoint_id, 1), by).front();
 }
 
 std::optional<Promotion> RunStore::promoted(const std::string& role) {
   if (!is_known_role(role))
     throw_invalid_argument("role", "one of approach, manipulate, retract, hlc, e2e",
                            "\"" + role + "\"");
-  auto st = db_.prepare("SELECT role, checkpoint_id, promoted_ms FROM promotions WHERE role = ?");
+  auto st = db_.prepare(
+      "SELECT role, checkpoint_id, promoted_ms, promoted_by FROM promotions WHERE role = ?");
   st.bind(1, role);
   if (!st.step()) return std::nullopt;
-  return Promotion{st.column_text(0), st.column_int(1), st.column_int(2)};
+  return Promotion{st.column_text(0), st.column_int(1), st.column_int(2), st.column_text(3)};
 }
 
 std::vector<Promotion> RunStore::promotions() {
-  auto st = db_.prepare("SELECT role, checkpoint_id, promoted_ms FROM promotions ORDER BY role");
+  auto st = db_.prepare(
+      "SELECT role, checkpoint_id, promoted_ms, promoted_by FROM promotions ORDER BY role");
   std::vector<Promotion> out;
-  while (st.step()) out.push_back({st.column_text(0), st.column_int(1), st.column_int(2)});
+  while (st.step())
+    out.push_back({st.column_text(0), st.column_int(1), st.column_int(2), st.column_text(3)});
   return out;
 }
 

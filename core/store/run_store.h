@@ -114,8 +114,10 @@ class RunStore {
 
   // The checkpoints serve their roles from now on (replacing each role's previous one),
   // all in one transaction: a reader sees all of them or none. At most one per role.
-  std::vector<Promotion> promote(std::span<const std::int64_t> checkpoint_ids);
-  Promotion promote(std::int64_t checkpoint_id);
+  // `by`: the authorized principal that asked (empty without an auth policy).
+  std::vector<Promotion> promote(std::span<const std::int64_t> checkpoint_ids,
+                                 const std::string& by = "");
+  Promotion promote(std::int64_t checkpoint_id, const std::string& by = "");
   std::optional<Promotion> promoted(const std::string& role);
   std::vector<Promotion> promotions();  // one consistent set
 
@@ -139,7 +141,7 @@ class RunStore {
                                  std::span<const std::uint8_t> blob,
                                  const TrainerCounters* unevaluated = nullptr);
   std::int64_t insert_run(const RunSpec& spec, RunState state);
-  void upsert_promotion(const CheckpointInfo& info, Millis now);
+  void upsert_promotion(const CheckpointInfo& info, Millis now, const std::string& by);
   GcReport prune_where(std::string_view run_condition, std::optional<std::int64_t> run_id,
                        const RetentionPolicy& policy);
   Database db_;

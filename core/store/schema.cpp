@@ -11,7 +11,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 5> kMigrations{
+constexpr std::array<std::string_view, 6> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -146,6 +146,21 @@ ALTER TABLE checkpoints ADD COLUMN episodes INTEGER;
 ALTER TABLE checkpoints ADD COLUMN updates INTEGER;
 ALTER TABLE checkpoints ADD COLUMN wall_s REAL;
 ALTER TABLE checkpoints ADD COLUMN eval_wall_s REAL;
+)sql",
+    // 6: the audit trail of operator and robot calls, and who promoted each checkpoint.
+    R"sql(
+CREATE TABLE audit (
+  id INTEGER PRIMARY KEY AUTOINCREMENT,
+  ts_ms INTEGER NOT NULL,
+  service TEXT NOT NULL,
+  principal TEXT NOT NULL,
+  peer TEXT NOT NULL,
+  rpc TEXT NOT NULL,
+  request TEXT NOT NULL,
+  code TEXT NOT NULL
+);
+CREATE INDEX audit_by_time ON audit (ts_ms);
+ALTER TABLE promotions ADD COLUMN promoted_by TEXT NOT NULL DEFAULT '';
 )sql",
 };
 

@@ -14,15 +14,55 @@
 #include <thread>
 
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/address.h"
 #include "services/common/rpc_metrics.h"
 
 namespace pnp::services {
 
+namespace {
+
+// Refuses what would expose an unauthenticated port beyond this machine, naming the flag.
+void check_exposure(const ServerConfig& config) {
+  const ServerSecurity& security = config.security;
+  if (security.policy && !security.tls.enabled()) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--auth-policy needs TLS (--tls-cert and --tls-key): tokens and principals "
+                "mean nothing over plaintext");
+  }
+  if (security.insecure) return;
+  if (!security.tls.enabled() && !is_loopback_address(config.address)) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--address " + config.address +
+                    " is reachable beyond this machine: serve TLS (--tls-cert, --tls-key, "
+                    "and --tls-client-ca or --auth-policy) or pass --insecure");
+  }
+  if (!config.metrics_address.empty() && !is_loopback_address(config.metrics_address)) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--metrics-address " + config.metrics_address +
+                    " is plaintext HTTP reachable beyond this machine: bind it to loopback "
+                    "(scrape through a sidecar) or pass --insecure");
+  }
+}
+
+}  // namespace
+
 ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
   validate_address(config.address, "--address");
   if (!config.metrics_address.empty())
     validate_address(config.metrics_address, "--metrics-address");
+  check_exposure(config);
+  if (config.security.insecure &&
+      (!is_loopback_address(config.address) || !config.security.tls.enabled())) {
+    log_event(config.log_name, "insecure",
+              {{"address", config.address},
+               {"tls", config.security.tls.enabled()},
+               {"warning", "--insecure: plaintext is allowed beyond loopback"}});
+  }
+  auto credentials = server_credentials(config.security.tls);
+  if (config.security.policy)
+    credentials->SetAuthMetadataProcessor(
+        make_policy_processor(config.security.policy, config.log_name));
   if (config.metrics == nullptr && !config.metrics_address.empty())
     throw_invalid_argument("metrics", "a registry to serve on " + config.metrics_address, "none");
   // Before gRPC starts: a metrics port that cannot listen fails the server whole.
@@ -31,18 +71,17 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(config.address, grpc::InsecureServerCredentials(), &port_);
+  builder.AddListeningPort(config.address, credentials, &port_);
   // Off: with SO_REUSEPORT a second server on a port in use binds too, and the kernel then
   // spreads the clients over two servers (two stores, two policies).
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   for (grpc::Service* s : config.services) builder.RegisterService(s);
-  if (config.metrics != nullptr) {
-    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
-    creators.push_back(make_rpc_metrics_factory(*config.metrics));
-    builder.experimental().SetInterceptorCreators(std::move(creators));
-  }
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
+  if (config.metrics != nullptr) creators.push_back(make_rpc_metrics_factory(*config.metrics));
+  creators.push_back(make_audit_factory(config.log_name, config.security.audit));
+  builder.experimental().SetInterceptorCreators(std::move(creators));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
     const std::string reason = listen_failure_reason(config.address);

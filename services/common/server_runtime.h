@@ -16,10 +16,23 @@
 #include <string_view>
 #include <vector>
 
+#include "security/auth_policy.h"
 #include "services/common/metrics_http_server.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/transport_security.h"
+#include "store/audit_trail.h"
 
 namespace pnp::services {
+
+// Who may connect and call (docs/RELIABILITY.md, "Who may do what"). Plaintext is for
+// loopback only unless `insecure`; an auth policy needs TLS (bearer tokens and principals
+// mean nothing over plaintext).
+struct ServerSecurity {
+  ServerTlsFiles tls{};
+  std::shared_ptr<const security::AuthPolicy> policy{};  // null: every caller may call
+  bool insecure = false;               // allows plaintext (gRPC, /metrics) beyond loopback
+  store::AuditTrail* audit = nullptr;  // null: the audit goes to the JSON log only
+};
 
 struct ServerConfig {
   std::string address = "127.0.0.1:0";
@@ -30,6 +43,8 @@ struct ServerConfig {
   // initialisers keep GCC 12 quiet about shorter aggregate initialisations.
   MetricsRegistry* metrics = nullptr;
   std::string metrics_address{};  // host:port for GET /metrics; empty: no endpoint
+  ServerSecurity security{};
+  std::string log_name{"server"};  // the "service" of its access and audit log lines
 };
 
 class ServerRuntime {

@@ -1,0 +1,24 @@
+#pragma once
+// What a caller may do, in four classes an authorization policy grants (docs/RELIABILITY.md,
+// "Who may do what"): read state, act as a policy's agent (predict, step a simulation),
+// operate the platform (train, promote, clear an E-stop), and move the robot.
+
+#include <optional>
+#include <string_view>
+
+namespace pnp::security {
+
+enum class AccessClass { kReader, kAgent, kOperator, kRobot };
+
+inline constexpr AccessClass kAllAccessClasses[] = {AccessClass::kReader, AccessClass::kAgent,
+                                                    AccessClass::kOperator, AccessClass::kRobot};
+
+std::string_view access_class_name(AccessClass c);  // "reader", "agent", "operator", "robot"
+std::optional<AccessClass> parse_access_class(std::string_view name);
+
+// What an RPC requires: one class, or (Stop, E-stop) any authenticated caller.
+struct RpcRequirement {
+  std::optional<AccessClass> access_class;  // empty: any authenticated principal
+};
+
+}  // namespace pnp::security

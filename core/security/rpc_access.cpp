@@ -1,0 +1,61 @@
+#include "security/rpc_access.h"
+
+#include <array>
+
+namespace pnp::security {
+namespace {
+
+constexpr RpcRequirement kReader{AccessClass::kReader};
+constexpr RpcRequirement kAgent{AccessClass::kAgent};
+constexpr RpcRequirement kOperator{AccessClass::kOperator};
+constexpr RpcRequirement kRobot{AccessClass::kRobot};
+constexpr RpcRequirement kAnyone{std::nullopt};  // any authenticated principal
+
+constexpr std::array kTable{
+    // Standard services every server registers.
+    RpcAccess{"/grpc.health.v1.Health/Check", kReader, false},
+    RpcAccess{"/grpc.health.v1.Health/Watch", kReader, false},
+    RpcAccess{"/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", kReader, false},
+    // Inference.
+    RpcAccess{"/pnp.policy.v1.PolicyService/Predict", kAgent, false},
+    RpcAccess{"/pnp.policy.v1.PolicyService/PredictSession", kAgent, false},
+    RpcAccess{"/pnp.policy.v1.PolicyService/PromoteCheckpoint", kOperator, true},
+    RpcAccess{"/pnp.policy.v1.PolicyService/GetServingStatus", kReader, false},
+    RpcAccess{"/pnp.policy.v1.PolicyService/Ping", kReader, false},
+    // Simulation.
+    RpcAccess{"/pnp.sim.v1.SimulationService/CreateEnv", kAgent, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/Reset", kAgent, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/Step", kAgent, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/ComputeReward", kAgent, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/GetEnvSpec", kReader, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/CloseEnv", kAgent, false},
+    RpcAccess{"/pnp.sim.v1.SimulationService/StreamRollout", kAgent, false},
+    // Training.
+    RpcAccess{"/pnp.train.v1.TrainingService/CreateTrainingRun", kOperator, true},
+    RpcAccess{"/pnp.train.v1.TrainingService/GetTrainingRun", kReader, false},
+    RpcAccess{"/pnp.train.v1.TrainingService/ListTrainingRuns", kReader, false},
+    RpcAccess{"/pnp.train.v1.TrainingService/CancelTrainingRun", kOperator, true},
+    RpcAccess{"/pnp.train.v1.TrainingService/WatchTrainingRun", kReader, false},
+    RpcAccess{"/pnp.train.v1.TrainingService/GetRunMetrics", kReader, false},
+    RpcAccess{"/pnp.train.v1.TrainingService/ListCheckpoints", kReader, false},
+    // The robot controller (and its simulated stand-in).
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/AcquireLease", kRobot, true},
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/ReleaseLease", kRobot, true},
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/StreamPoseTargets", kRobot, true},
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/GetState", kReader, false},
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/Stop", kAnyone, true},
+    RpcAccess{"/pnp.robot.v1.RobotControllerService/Resume", kOperator, true},
+    RpcAccess{"/pnp.robot.v1.SimulatedSceneService/ResetScene", kRobot, true},
+};
+
+}  // namespace
+
+std::span<const RpcAccess> rpc_access_table() { return kTable; }
+
+const RpcAccess* find_rpc_access(std::string_view path) {
+  for (const RpcAccess& entry : kTable)
+    if (entry.path == path) return &entry;
+  return nullptr;
+}
+
+}  // namespace pnp::security

@@ -1,0 +1,53 @@
+#pragma once
+// The audit trail: who called which operator or robot RPC, with what, and how it ended
+// (table `audit`, schema migration 6). Appending never makes the RPC wait for the disk: a
+// writer thread commits the records in order, in batches, retrying a busy store. At most
+// `capacity` records wait; beyond that new ones are dropped and counted (the services'
+// JSON log has every record regardless).
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "store/records.h"
+
+namespace pnp::store {
+
+class AuditTrail {
+ public:
+  using Report = std::function<void(const std::string&)>;
+  // Opens (creating and migrating if needed) the store at `path` on the writer thread;
+  // `report` hears about records that could not be written.
+  AuditTrail(std::string path, Report report, std::size_t capacity = 10'000);
+  ~AuditTrail();  // commits what is queued, then stops
+  AuditTrail(const AuditTrail&) = delete;
+  AuditTrail& operator=(const AuditTrail&) = delete;
+
+  void append(AuditRecord record);
+  // Blocks until every record appended before the call is committed (or failed).
+  void flush();
+  std::uint64_t dropped() const;
+
+ private:
+  void write_loop(const std::stop_token& stop);
+
+  std::string path_;
+  Report report_;
+  std::size_t capacity_;
+  mutable std::mutex mutex_;
+  std::condition_variable_any wake_;
+  std::condition_variable written_;
+  std::deque<AuditRecord> queue_;
+  std::uint64_t appended_ = 0, done_ = 0, dropped_ = 0;
+  std::jthread writer_;  // last: stopped and joined before the members it uses go
+};
+
+// The records with ts_ms >= since_ms, oldest first, at most `limit` (the newest ones).
+std::vector<AuditRecord> read_audit(const std::string& path, Millis since_ms, int limit);
+
+}  // namespace pnp::store

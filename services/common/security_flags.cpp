@@ -1,0 +1,42 @@
+#include "services/common/security_flags.h"
+
+namespace pnp::services {
+
+void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags) {
+  app.add_option("--tls-cert", flags.tls.cert, "PEM certificate chain: serve TLS");
+  app.add_option("--tls-key", flags.tls.key, "PEM private key of --tls-cert");
+  app.add_option("--tls-client-ca", flags.tls.client_ca,
+                 "PEM CA: require client certificates it signed (mutual TLS)");
+  app.add_option("--tls-reload-s", flags.tls.reload_s,
+                 "how often the TLS files are checked for changes (rotation)")
+      ->capture_default_str();
+  app.add_option("--auth-policy", flags.auth_policy,
+                 "JSON policy: which principals (token or certificate) may call what");
+  app.add_flag("--insecure", flags.insecure,
+               "allow plaintext gRPC and /metrics on a non-loopback address");
+}
+
+ServerSecurity load_server_security(const ServerSecurityFlags& flags) {
+  validate(flags.tls);
+  ServerSecurity out;
+  out.tls = flags.tls;
+  out.insecure = flags.insecure;
+  if (!flags.auth_policy.empty())
+    out.policy =
+        std::make_shared<const security::AuthPolicy>(security::AuthPolicy::load(flags.auth_policy));
+  return out;
+}
+
+void add_client_security_flags(CLI::App& app, ClientTlsFiles& files, const std::string& prefix) {
+  const std::string p = "--" + prefix;
+  app.add_option(p + "tls-ca", files.ca, "PEM CA that signed the servers' certificates: dial TLS");
+  app.add_option(p + "tls-cert", files.cert, "PEM client certificate (mutual TLS)");
+  app.add_option(p + "tls-key", files.key, "PEM private key of the client certificate");
+  app.add_option(p + "tls-server-name", files.server_name,
+                 "the name to verify in the servers' certificates (default: the host dialled)");
+  auto* token = app.add_option(p + "token-file", files.token_file,
+                               "file whose first line is a bearer token (TLS only)");
+  if (prefix.empty()) token->envname("PNP_TOKEN_FILE");
+}
+
+}  // namespace pnp::services
