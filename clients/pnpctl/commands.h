@@ -56,6 +56,16 @@ int plot_command(const Endpoints& endpoints, const std::string& role,
 // Deletes the checkpoints retention does not keep (store::RetentionPolicy) from the store
 // file at `db_path`, and gives the freed pages back to the filesystem.
 int gc_command(const std::string& db_path, int keep_last, bool json);
+
+// The audit trail of the store file at `db`: operator and robot calls, allowed or refused,
+// oldest first (the newest `limit` since `since`: parse_since's forms).
+struct AuditArgs {
+  std::string db;
+  std::string since;  // empty: from the start
+  int limit = 1000;
+  bool json = false;  // one JSON object per line
+};
+int audit_command(const AuditArgs& args);
 // Several ids are promoted together, in one transaction (at most one per role).
 int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>& checkpoint_ids);
 

@@ -1,6 +1,7 @@
 #include "clients/pnpctl/endpoints.h"
 
 #include "common/error.h"
+#include "services/common/security_flags.h"
 
 namespace pnp::pnpctl {
 
@@ -27,6 +28,12 @@ const std::string& Endpoints::address_of(const std::string& service) const {
                          "\"" + service + "\"");
 }
 
+std::shared_ptr<grpc::Channel> Endpoints::channel(const std::string& address) const {
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(64 << 20);
+  return services::dial(address, tls, args);
+}
+
 void add_endpoint_options(CLI::App& app, Endpoints& e) {
   // Each address also comes from the environment (PNP_SIM_ADDRESS, ...): a shell that
   // talks to one deployment sets them once; a flag still wins.
@@ -42,6 +49,7 @@ void add_endpoint_options(CLI::App& app, Endpoints& e) {
   add("--inference", e.inference, "PNP_INFERENCE_ADDRESS", "inference service address");
   add("--robot-controller", e.robot_controller, "PNP_ROBOT_CONTROLLER_ADDRESS",
       "robot controller address (pnp-robot-sim); health --only robot");
+  services::add_client_security_flags(app, e.tls);
 }
 
 }  // namespace pnp::pnpctl

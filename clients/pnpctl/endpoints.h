@@ -1,9 +1,15 @@
 #pragma once
-// Where each service listens. The defaults are the platform's conventional loopback
-// ports (scripts/run and deploy/ use the same).
+// Where each service listens, and how to reach it: plaintext, TLS or mutual TLS, with or
+// without a bearer token (--tls-ca, --tls-cert, --tls-key, --token-file). The defaults are
+// the platform's conventional loopback ports (scripts/run and deploy/ use the same).
+
+#include <grpcpp/grpcpp.h>
 
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <string>
+
+#include "services/common/transport_security.h"
 
 namespace pnp::pnpctl {
 
@@ -16,6 +22,11 @@ struct Endpoints {
   std::string e2e = "127.0.0.1:50056";
   std::string inference = "127.0.0.1:50060";
   std::string robot_controller = "127.0.0.1:50070";  // not in kAllServices: not the platform's
+  services::ClientTlsFiles tls;                      // the same for every service
+
+  // A channel to `address` with the credentials above (INVALID_ARGUMENT naming the flag
+  // for a bad address or file).
+  std::shared_ptr<grpc::Channel> channel(const std::string& address) const;
 
   // The training service of a role; INVALID_ARGUMENT for an unknown role.
   const std::string& training(const std::string& role) const;

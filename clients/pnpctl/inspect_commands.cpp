@@ -14,8 +14,9 @@ namespace {
 
 constexpr const char* kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
 
-std::vector<train::v1::MetricPoint> fetch_metrics(const std::string& address, std::int64_t id) {
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+std::vector<train::v1::MetricPoint> fetch_metrics(const Endpoints& endpoints,
+                                                  const std::string& address, std::int64_t id) {
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   train::v1::GetRunMetricsRequest request;
   request.set_run_id(id);
   train::v1::GetRunMetricsResponse response;
@@ -24,8 +25,9 @@ std::vector<train::v1::MetricPoint> fetch_metrics(const std::string& address, st
   return {response.points().begin(), response.points().end()};
 }
 
-train::v1::TrainingRun fetch_run(const std::string& address, std::int64_t id) {
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+train::v1::TrainingRun fetch_run(const Endpoints& endpoints, const std::string& address,
+                                 std::int64_t id) {
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   train::v1::GetTrainingRunRequest request;
   request.set_run_id(id);
   train::v1::GetTrainingRunResponse response;
@@ -49,7 +51,7 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
   }
   for (const auto& r : roles) {
     const std::string& address = endpoints.training(r);
-    auto stub = train::v1::TrainingService::NewStub(channel(address));
+    auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
     train::v1::ListTrainingRunsRequest request;
     request.set_page_size(limit);
     if (!state.empty()) request.set_state(parse_state(state, "--state"));
@@ -77,7 +79,7 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
 int checkpoints_command(const Endpoints& endpoints, const std::string& role, std::int64_t run_id,
                         bool csv) {
   const std::string& address = endpoints.training(role);
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   train::v1::ListCheckpointsRequest request;
   request.set_run_id(run_id);
   train::v1::ListCheckpointsResponse response;
@@ -100,7 +102,7 @@ int metrics_command(const Endpoints& endpoints, const std::string& role, std::in
                     bool csv) {
   Table table({"env_steps", "episodes", "wall_s", "stop_score", "task_success", "subtask_success",
                "sampled_success", "critic_loss", "actor_loss", "updates"});
-  for (const auto& p : fetch_metrics(endpoints.training(role), run_id)) {
+  for (const auto& p : fetch_metrics(endpoints, endpoints.training(role), run_id)) {
     table.add({std::to_string(p.env_steps()), std::to_string(p.episodes()), fixed(p.wall_s(), 1),
                p.has_stop_score() ? fixed(p.stop_score(), 3) : "", fixed(p.task_success(), 3),
                fixed(p.subtask_success(), 3), fixed(p.sampled_success(), 3),
@@ -120,8 +122,9 @@ int plot_command(const Endpoints& endpoints, const std::string& role,
   const std::string& address = endpoints.training(role);
   std::vector<plot::Series> series;
   for (std::size_t i = 0; i < run_ids.size(); ++i) {
-    plot::Series s{series_label(fetch_run(address, run_ids[i])), plot::palette_colour(i), {}};
-    for (const auto& p : fetch_metrics(address, run_ids[i])) {
+    plot::Series s{
+        series_label(fetch_run(endpoints, address, run_ids[i])), plot::palette_colour(i), {}};
+    for (const auto& p : fetch_metrics(endpoints, address, run_ids[i])) {
       if (score && !p.has_stop_score()) continue;  // stored before the score was kept
       s.points.emplace_back(static_cast<double>(p.env_steps()),
                             score ? p.stop_score() : p.task_success());

@@ -146,6 +146,21 @@ int main(int argc, char** argv) {
   gc_cmd->add_flag("--json", gc_json, "machine-readable output");
   gc_cmd->callback([&] { command = [&] { return gc_command(gc_db, gc_keep, gc_json); }; });
 
+  AuditArgs audit;
+  auto* audit_cmd = app.add_subcommand(
+      "audit", "who called which operator or robot RPC, and how it ended (a store's audit trail)");
+  audit_cmd->add_option("--db", audit.db, "the SQLite store [$PNP_DB]")
+      ->envname("PNP_DB")
+      ->required();
+  audit_cmd->add_option("--since", audit.since,
+                        "from this long ago (90s, 15m, 2h, 7d) or this UTC time (2026-12-04, "
+                        "2026-12-04T15:30:00Z)");
+  audit_cmd->add_option("--limit", audit.limit, "at most this many, the newest")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  audit_cmd->add_flag("--json", audit.json, "one JSON object per line");
+  audit_cmd->callback([&] { command = [&] { return audit_command(audit); }; });
+
   std::vector<std::int64_t> plot_runs;
   std::string plot_out = "learning_curves.svg";
   auto* plot_cmd = app.add_subcommand("plot", "draw learning curves as SVG");

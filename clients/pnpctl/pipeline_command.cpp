@@ -32,7 +32,7 @@ void wait_until_healthy(const Endpoints& endpoints, const std::vector<std::strin
       Clock::now() + std::chrono::milliseconds(static_cast<long long>(wait_s * 1000));
   for (const auto& name : services) {
     const std::string& address = endpoints.address_of(name);
-    auto stub = grpc::health::v1::Health::NewStub(channel(address));
+    auto stub = grpc::health::v1::Health::NewStub(endpoints.channel(address));
     for (;;) {
       grpc::health::v1::HealthCheckResponse response;
       const grpc::Status status =
@@ -54,12 +54,12 @@ struct RoleResult {
 
 RoleResult train(const Endpoints& endpoints, const TrainArgs& args) {
   const std::string& address = endpoints.training(args.role);
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   train::v1::CreateTrainingRunResponse created;
   check(stub->CreateTrainingRun(context_with_deadline().get(), make_request(args), &created),
         "CreateTrainingRun", address);
   RoleResult out;
-  out.run = watch_run(address, created.run().run_id(), {args.quiet, stderr});
+  out.run = watch_run(endpoints, address, created.run().run_id(), {args.quiet, stderr});
   if (out.run.state() != train::v1::RUN_STATE_SUCCEEDED) {
     throw Error(ErrorCode::kFailedPrecondition,
                 args.role + " run " + std::to_string(out.run.run_id()) + " ended " +
@@ -77,7 +77,7 @@ RoleResult train(const Endpoints& endpoints, const TrainArgs& args) {
 // The inference service serves a promotion at once; this waits for the choreographer's
 // to be the one served (a reload by another writer could lag by its reload period).
 void wait_until_served(const Endpoints& endpoints, std::int64_t hlc_checkpoint, double wait_s) {
-  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  auto stub = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   const auto deadline =
       Clock::now() + std::chrono::milliseconds(static_cast<long long>(wait_s * 1000));
   for (;;) {

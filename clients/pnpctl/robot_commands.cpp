@@ -13,7 +13,7 @@ namespace {
 namespace rv1 = robot::v1;
 
 std::unique_ptr<rv1::RobotControllerService::Stub> controller(const Endpoints& endpoints) {
-  return rv1::RobotControllerService::NewStub(channel(endpoints.robot_controller));
+  return rv1::RobotControllerService::NewStub(endpoints.channel(endpoints.robot_controller));
 }
 
 std::string stop_kind(rv1::StopKind kind) {

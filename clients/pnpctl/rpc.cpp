@@ -42,13 +42,6 @@ std::string enum_short_name(const google::protobuf::EnumDescriptor* descriptor,
 
 }  // namespace
 
-std::shared_ptr<grpc::Channel> channel(const std::string& address) {
-  services::validate_address(address, "address");
-  grpc::ChannelArguments args;
-  args.SetMaxReceiveMessageSize(64 << 20);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
-}
-
 std::unique_ptr<grpc::ClientContext> context_with_deadline(std::chrono::milliseconds timeout) {
   auto context = std::make_unique<grpc::ClientContext>();
   context->set_deadline(std::chrono::system_clock::now() + timeout);

@@ -1,5 +1,5 @@
 #pragma once
-// Talking to the services: channels, deadlines, failed calls as one clear error, and the
+// Talking to the services: deadlines, failed calls as one clear error, and the
 // proto enums as the short names users type ("approach", "ddpg_her", "fetch").
 
 #include <grpcpp/grpcpp.h>
@@ -13,8 +13,6 @@
 #include "pnp/train/v1/train_service.pb.h"
 
 namespace pnp::pnpctl {
-
-std::shared_ptr<grpc::Channel> channel(const std::string& address);
 
 // A context whose call gives up after `timeout` (unary calls never hang on a dead server).
 std::unique_ptr<grpc::ClientContext> context_with_deadline(

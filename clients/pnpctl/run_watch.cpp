@@ -8,9 +8,9 @@
 
 namespace pnp::pnpctl {
 
-train::v1::TrainingRun watch_run(const std::string& address, std::int64_t run_id,
-                                 const WatchOptions& options) {
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+train::v1::TrainingRun watch_run(const Endpoints& endpoints, const std::string& address,
+                                 std::int64_t run_id, const WatchOptions& options) {
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   grpc::ClientContext context;
   train::v1::WatchTrainingRunRequest request;
   request.set_run_id(run_id);

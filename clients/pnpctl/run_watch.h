@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "clients/pnpctl/endpoints.h"
 #include "pnp/train/v1/train_service.pb.h"
 
 namespace pnp::pnpctl {
@@ -15,7 +16,7 @@ struct WatchOptions {
 };
 
 // The run as it ended. Throws pnp::Error if the stream fails.
-train::v1::TrainingRun watch_run(const std::string& address, std::int64_t run_id,
-                                 const WatchOptions& options);
+train::v1::TrainingRun watch_run(const Endpoints& endpoints, const std::string& address,
+                                 std::int64_t run_id, const WatchOptions& options);
 
 }  // namespace pnp::pnpctl

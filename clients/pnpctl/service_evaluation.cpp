@@ -103,8 +103,8 @@ void require_evaluation_episodes(int episodes) {
 ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const ServiceWorld& world,
                                             int episodes, std::uint64_t seed) {
   require_evaluation_episodes(episodes);
-  auto sim = sim::v1::SimulationService::NewStub(channel(endpoints.sim));
-  auto policy = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  auto sim = sim::v1::SimulationService::NewStub(endpoints.channel(endpoints.sim));
+  auto policy = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   sim::v1::CreateEnvRequest create;
   create.set_robot(world.robot);
   create.set_object(world.object);

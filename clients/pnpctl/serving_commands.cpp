@@ -14,7 +14,7 @@
 namespace pnp::pnpctl {
 
 int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>& checkpoint_ids) {
-  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  auto stub = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   policy::v1::PromoteCheckpointRequest request;
   for (const std::int64_t id : checkpoint_ids) request.add_checkpoint_ids(id);
   policy::v1::PromoteCheckpointResponse response;
@@ -35,7 +35,7 @@ namespace {
 // The first observation and goal of the simulation service's episode for `seed`.
 void observe_from_sim(const Endpoints& endpoints, const PredictArgs& args,
                       policy::v1::PredictRequest& request) {
-  auto sim = sim::v1::SimulationService::NewStub(channel(endpoints.sim));
+  auto sim = sim::v1::SimulationService::NewStub(endpoints.channel(endpoints.sim));
   sim::v1::CreateEnvRequest create;
   create.set_robot(parse_robot(args.robot, "--robot"));
   create.set_object(parse_object(args.object, "--object"));
@@ -75,7 +75,7 @@ int predict_command(const Endpoints& endpoints, const PredictArgs& args) {
     request.mutable_goal()->set_y_m(args.goal[1]);
     request.mutable_goal()->set_z_m(args.goal[2]);
   }
-  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  auto stub = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   policy::v1::PredictResponse response;
   check(stub->Predict(context_with_deadline().get(), request, &response), "Predict",
         endpoints.inference);
@@ -100,7 +100,7 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
   int failures = 0;
   for (const auto& name : services) {
     const std::string& address = endpoints.address_of(name);
-    auto stub = grpc::health::v1::Health::NewStub(channel(address));
+    auto stub = grpc::health::v1::Health::NewStub(endpoints.channel(address));
     grpc::health::v1::HealthCheckResponse response;
     const auto timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000));
     const grpc::Status status = stub->Check(context_with_deadline(timeout).get(), {}, &response);
@@ -126,7 +126,7 @@ namespace {
 // (gym/fetch/block)"; empty if none. A mismatch can be deliberate (a retract fine-tuned for
 // another shape), so it is a warning unless --strict.
 std::string served_world_mismatch(const Endpoints& endpoints, const EvaluateArgs& args) {
-  auto stub = policy::v1::PolicyService::NewStub(channel(endpoints.inference));
+  auto stub = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   policy::v1::GetServingStatusResponse status;
   check(stub->GetServingStatus(context_with_deadline().get(), {}, &status), "GetServingStatus",
         endpoints.inference);

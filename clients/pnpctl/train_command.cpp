@@ -70,11 +70,11 @@ int cancel_command(const Endpoints& endpoints, std::int64_t run_id, const std::s
   get.set_run_id(run_id);
   train::v1::GetTrainingRunResponse found;
   const std::string& reader = endpoints.training(via);
-  check(train::v1::TrainingService::NewStub(channel(reader))
+  check(train::v1::TrainingService::NewStub(endpoints.channel(reader))
             ->GetTrainingRun(context_with_deadline().get(), get, &found),
         "GetTrainingRun", reader);
   const std::string& owner = endpoints.training(short_name(found.run().role()));
-  auto stub = train::v1::TrainingService::NewStub(channel(owner));
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(owner));
   train::v1::CancelTrainingRunRequest request;
   request.set_run_id(run_id);
   train::v1::CancelTrainingRunResponse cancelled;
@@ -99,7 +99,7 @@ int cancel_command(const Endpoints& endpoints, std::int64_t run_id, const std::s
 int train_command(const Endpoints& endpoints, const TrainArgs& args) {
   const std::string& address = endpoints.training(args.role);
   const auto request = make_request(args);
-  auto stub = train::v1::TrainingService::NewStub(channel(address));
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
   train::v1::CreateTrainingRunResponse created;
   check(stub->CreateTrainingRun(context_with_deadline().get(), request, &created),
         "CreateTrainingRun", address);
@@ -107,7 +107,7 @@ int train_command(const Endpoints& endpoints, const TrainArgs& args) {
               short_name(created.run().state()).c_str());
   if (args.detach) return 0;
   explain_interrupt(created.run().run_id());
-  const auto run = watch_run(address, created.run().run_id(), {args.quiet, stderr});
+  const auto run = watch_run(endpoints, address, created.run().run_id(), {args.quiet, stderr});
   const std::string target = run.reached()
                                  ? "target " + fixed(run.target_success(), 2) + " reached at " +
                                        std::to_string(run.steps_to_target()) + " steps"

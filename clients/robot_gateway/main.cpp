@@ -3,6 +3,7 @@
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
 //   --episodes 5 --seed 1000 [--dry-run] [--json]
+//   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
 // clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once.
 
@@ -22,6 +23,7 @@
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
 #include "services/common/address.h"
+#include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 
 int main(int argc, char** argv) {
@@ -51,6 +53,8 @@ int main(int argc, char** argv) {
   app.add_flag("--dry-run", dry_run, "compute and log targets without sending them");
   app.add_flag("--json", json, "print the summary as one JSON object");
   app.add_flag("--quiet", quiet, "no per-event log lines on stderr");
+  services::ClientTlsFiles tls;  // the controller's and the inference service's
+  services::add_client_security_flags(app, tls);
   CLI11_PARSE(app, argc, argv);
   try {
     if (episodes < 1) {
@@ -58,6 +62,7 @@ int main(int argc, char** argv) {
     }
     services::validate_address(controller_address, "--controller");
     services::validate_address(inference_address, "--inference");
+    services::validate(tls);
     const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
     // Ctrl-C or SIGTERM: the running episode stops the arm and ends; a second one exits
     // at once (the arm's own dead-man, the lease, then holds it).
@@ -79,10 +84,8 @@ int main(int argc, char** argv) {
       }
     } wake{finished};
     const auto timeout = std::chrono::milliseconds(2000);
-    auto controller_channel =
-        grpc::CreateChannel(controller_address, grpc::InsecureChannelCredentials());
-    auto inference_channel =
-        grpc::CreateChannel(inference_address, grpc::InsecureChannelCredentials());
+    auto controller_channel = services::dial(controller_address, tls);
+    auto inference_channel = services::dial(inference_address, tls);
     for (auto& [channel, address] : {std::pair{controller_channel, controller_address},
                                      std::pair{inference_channel, inference_address}}) {
       if (!channel->WaitForConnected(std::chrono::system_clock::now() + timeout)) {

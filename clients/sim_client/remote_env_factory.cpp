@@ -7,6 +7,7 @@ namespace pnp::sim_client {
 
 RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& addresses, sim::Robot robot,
                                    sim::ObjectShape object, sim::WorldProfile world,
+                                   const services::ClientTlsFiles& tls,
                                    std::chrono::milliseconds connect_timeout)
     : robot_(robot), object_(object), world_(world), connect_timeout_(connect_timeout) {
   if (addresses.empty()) {
@@ -18,8 +19,7 @@ RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& addresses, si
       throw Error(ErrorCode::kInvalidArgument, "sim_address: expected host:port, got \"\"");
     // One channel per service, shared by its environments: their streams multiplex over
     // one HTTP/2 connection.
-    services_.push_back(
-        {address, grpc::CreateChannel(address, grpc::InsecureChannelCredentials())});
+    services_.push_back({address, services::dial(address, tls)});
   }
 }
 

@@ -12,15 +12,18 @@
 #include <string>
 #include <vector>
 
+#include "services/common/transport_security.h"
 #include "sim/env_factory.h"
 
 namespace pnp::sim_client {
 
 class RemoteEnvFactory final : public sim::EnvFactory {
  public:
-  // addresses: host:port of each service (at least one; INVALID_ARGUMENT otherwise).
+  // addresses: host:port of each service (at least one; INVALID_ARGUMENT otherwise), all
+  // dialled with `tls` (plaintext by default).
   RemoteEnvFactory(const std::vector<std::string>& addresses, sim::Robot robot,
                    sim::ObjectShape object, sim::WorldProfile world = sim::WorldProfile::kPaper,
+                   const services::ClientTlsFiles& tls = {},
                    std::chrono::milliseconds connect_timeout = std::chrono::seconds(10));
   std::unique_ptr<sim::Environment> make() const override;
   sim::Robot robot() const override { return robot_; }

@@ -54,16 +54,16 @@ PolicyPrincipal parse_principal(const nlohmann::json& entry, const std::string& 
   }
   if (!entry.contains("classes") || !entry.at("classes").is_array() ||
       entry.at("classes").empty()) {
-    throw_invalid_argument(where + ".classes",
-                           "a non-empty list of reader, agent, operator, robot",
+    throw_invalid_argument(where + ".classes", "a non-empty list of reader, agent, operator, robot",
                            entry.contains("classes") ? entry.at("classes").dump() : "none");
   }
   const auto& classes = entry.at("classes");
   for (std::size_t i = 0; i < classes.size(); ++i) {
     const std::string field = where + ".classes[" + std::to_string(i) + "]";
-    const auto parsed = classes[i].is_string() ? parse_access_class(classes[i].get<std::string>())
-                                               : std::nullopt;
-    if (!parsed) throw_invalid_argument(field, "reader, agent, operator or robot", classes[i].dump());
+    const auto parsed =
+        classes[i].is_string() ? parse_access_class(classes[i].get<std::string>()) : std::nullopt;
+    if (!parsed)
+      throw_invalid_argument(field, "reader, agent, operator or robot", classes[i].dump());
     p.classes.insert(*parsed);
   }
   return p;

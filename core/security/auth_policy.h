@@ -68,6 +68,7 @@ struct AccessDecision {
 // empty means the RPC is not in the table: denied. A bearer token, when sent, decides who
 // the caller is (a wrong one is never excused by a certificate).
 AccessDecision decide_access(const AuthPolicy& policy, const PresentedCredentials& presented,
-                             std::string_view rpc, const std::optional<RpcRequirement>& requirement);
+                             std::string_view rpc,
+                             const std::optional<RpcRequirement>& requirement);
 
 }  // namespace pnp::security

@@ -50,7 +50,9 @@ constexpr std::array kTable{
 
 }  // namespace
 
-std::span<const RpcAccess> rpc_access_table() { return kTable; }
+std::span<const RpcAccess> rpc_access_table() {
+  return kTable;
+}
 
 const RpcAccess* find_rpc_access(std::string_view path) {
   for (const RpcAccess& entry : kTable)

@@ -18,16 +18,23 @@ namespace gx = grpc::experimental;
 
 constexpr std::size_t kMaxAuditedRequest = 2048;
 
-std::string text(const grpc::string_ref& s) { return {s.data(), s.size()}; }
+std::string text(const grpc::string_ref& s) {
+  return {s.data(), s.size()};
+}
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
 
 std::string first_value(const grpc::AuthContext& context, const char* property) {
   const auto values = context.FindPropertyValues(property);
   return values.empty() ? std::string() : text(values.front());
 }
 
-security::PresentedCredentials presented(
-    const grpc::AuthMetadataProcessor::InputMetadata& metadata,
-    const grpc::AuthContext& context) {
+security::PresentedCredentials presented(const grpc::AuthMetadataProcessor::InputMetadata& metadata,
+                                         const grpc::AuthContext& context) {
   security::PresentedCredentials out;
   const auto header = metadata.find("authorization");
   if (header != metadata.end()) {
@@ -47,8 +54,9 @@ security::PresentedCredentials presented(
 
 class PolicyProcessor final : public grpc::AuthMetadataProcessor {
  public:
-  PolicyProcessor(std::shared_ptr<const security::AuthPolicy> policy, std::string service)
-      : policy_(std::move(policy)), service_(std::move(service)) {}
+  PolicyProcessor(std::shared_ptr<const security::AuthPolicy> policy, std::string service,
+                  store::AuditTrail* audit)
+      : policy_(std::move(policy)), service_(std::move(service)), audit_(audit) {}
 
   bool IsBlocking() const override { return false; }  // hashing and a table lookup
 
@@ -57,9 +65,9 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
     const auto path_it = metadata.find(":path");
     const std::string rpc = path_it == metadata.end() ? std::string() : text(path_it->second);
     const security::RpcAccess* access = security::find_rpc_access(rpc);
-    const auto decision = security::decide_access(
-        *policy_, presented(metadata, *context), rpc,
-        access ? std::optional(access->requirement) : std::nullopt);
+    const auto decision =
+        security::decide_access(*policy_, presented(metadata, *context), rpc,
+                                access ? std::optional(access->requirement) : std::nullopt);
     // The token goes no further: handlers, interceptors and logs never see it.
     const auto header = metadata.find("authorization");
     if (header != metadata.end()) consumed->emplace(text(header->first), text(header->second));
@@ -69,19 +77,33 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
       return grpc::Status::OK;
     }
     const bool unauthenticated = decision.outcome == Outcome::kUnauthenticated;
+    const char* code = unauthenticated ? "UNAUTHENTICATED" : "PERMISSION_DENIED";
     log_event(service_, "access_denied",
               {{"rpc", rpc},
                {"principal", decision.principal},
-               {"code", unauthenticated ? "UNAUTHENTICATED" : "PERMISSION_DENIED"},
+               {"code", code},
                {"reason", decision.message}});
-    return {unauthenticated ? grpc::StatusCode::UNAUTHENTICATED
-                            : grpc::StatusCode::PERMISSION_DENIED,
-            decision.message};
+    // A refused attempt at an operator or robot call is as much the audit's business as an
+    // allowed one (the request itself is not read: it never reaches the server).
+    if (audit_ && access && access->audited) {
+      store::AuditRecord r;
+      r.ts_ms = now_ms();
+      r.service = service_;
+      r.principal = decision.principal;
+      r.rpc = rpc;
+      r.request = "{}";
+      r.code = code;
+      audit_->append(std::move(r));
+    }
+    return {
+        unauthenticated ? grpc::StatusCode::UNAUTHENTICATED : grpc::StatusCode::PERMISSION_DENIED,
+        decision.message};
   }
 
  private:
   std::shared_ptr<const security::AuthPolicy> policy_;
   std::string service_;
+  store::AuditTrail* audit_;
 };
 
 std::string request_json(const void* message) {
@@ -117,9 +139,7 @@ class AuditInterceptor final : public gx::Interceptor {
   void record(grpc::StatusCode code) {
     const auto* context = info_->server_context();
     store::AuditRecord r;
-    r.ts_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                  std::chrono::system_clock::now().time_since_epoch())
-                  .count();
+    r.ts_ms = now_ms();
     r.service = service_;
     r.principal = principal_of(*context);
     r.peer = context->peer();
@@ -171,8 +191,9 @@ std::string principal_of(const grpc::ServerContextBase& context) {
 }
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(
-    std::shared_ptr<const security::AuthPolicy> policy, std::string service) {
-  return std::make_shared<PolicyProcessor>(std::move(policy), std::move(service));
+    std::shared_ptr<const security::AuthPolicy> policy, std::string service,
+    store::AuditTrail* audit) {
+  return std::make_shared<PolicyProcessor>(std::move(policy), std::move(service), audit);
 }
 
 std::unique_ptr<gx::ServerInterceptorFactoryInterface> make_audit_factory(

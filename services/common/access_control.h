@@ -25,8 +25,10 @@ inline constexpr const char* kPrincipalProperty = "pnp_principal";
 // The caller's principal as the processor recorded it; empty without a policy.
 std::string principal_of(const grpc::ServerContextBase& context);
 
+// Refused operator and robot calls also go to `audit` (may be null; must outlive the server).
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(
-    std::shared_ptr<const security::AuthPolicy> policy, std::string service);
+    std::shared_ptr<const security::AuthPolicy> policy, std::string service,
+    store::AuditTrail* audit);
 
 // `audit` may be null (JSON log only); it must outlive the server.
 std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface> make_audit_factory(

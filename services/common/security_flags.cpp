@@ -2,7 +2,7 @@
 
 namespace pnp::services {
 
-void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags) {
+void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags, bool audit_db_flag) {
   app.add_option("--tls-cert", flags.tls.cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", flags.tls.key, "PEM private key of --tls-cert");
   app.add_option("--tls-client-ca", flags.tls.client_ca,
@@ -14,9 +14,24 @@ void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags) {
                  "JSON policy: which principals (token or certificate) may call what");
   app.add_flag("--insecure", flags.insecure,
                "allow plaintext gRPC and /metrics on a non-loopback address");
+  if (audit_db_flag) {
+    app.add_option("--audit-db", flags.audit_db,
+                   "SQLite store to append the audit trail to (created if missing; empty: the "
+                   "JSON log only)");
+  }
 }
 
-ServerSecurity load_server_security(const ServerSecurityFlags& flags) {
+std::unique_ptr<store::AuditTrail> open_audit_trail(const std::string& db,
+                                                    std::string_view service) {
+  if (db.empty()) return nullptr;
+  return std::make_unique<store::AuditTrail>(
+      db, [service = std::string(service)](const std::string& problem) {
+        log_event(service, "audit_write_failed", {{"error", problem}});
+      });
+}
+
+ServerSecurity load_server_security(const ServerSecurityFlags& flags, const std::string& address,
+                                    const std::string& metrics_address) {
   validate(flags.tls);
   ServerSecurity out;
   out.tls = flags.tls;
@@ -24,6 +39,7 @@ ServerSecurity load_server_security(const ServerSecurityFlags& flags) {
   if (!flags.auth_policy.empty())
     out.policy =
         std::make_shared<const security::AuthPolicy>(security::AuthPolicy::load(flags.auth_policy));
+  check_exposure(address, metrics_address, out);
   return out;
 }
 

@@ -20,38 +20,33 @@
 
 namespace pnp::services {
 
-namespace {
-
-// Refuses what would expose an unauthenticated port beyond this machine, naming the flag.
-void check_exposure(const ServerConfig& config) {
-  const ServerSecurity& security = config.security;
+void check_exposure(const std::string& address, const std::string& metrics_address,
+                    const ServerSecurity& security) {
   if (security.policy && !security.tls.enabled()) {
     throw Error(ErrorCode::kFailedPrecondition,
                 "--auth-policy needs TLS (--tls-cert and --tls-key): tokens and principals "
                 "mean nothing over plaintext");
   }
   if (security.insecure) return;
-  if (!security.tls.enabled() && !is_loopback_address(config.address)) {
+  if (!security.tls.enabled() && !is_loopback_address(address)) {
     throw Error(ErrorCode::kFailedPrecondition,
-                "--address " + config.address +
+                "--address " + address +
                     " is reachable beyond this machine: serve TLS (--tls-cert, --tls-key, "
                     "and --tls-client-ca or --auth-policy) or pass --insecure");
   }
-  if (!config.metrics_address.empty() && !is_loopback_address(config.metrics_address)) {
+  if (!metrics_address.empty() && !is_loopback_address(metrics_address)) {
     throw Error(ErrorCode::kFailedPrecondition,
-                "--metrics-address " + config.metrics_address +
+                "--metrics-address " + metrics_address +
                     " is plaintext HTTP reachable beyond this machine: bind it to loopback "
                     "(scrape through a sidecar) or pass --insecure");
   }
 }
 
-}  // namespace
-
 ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
   validate_address(config.address, "--address");
   if (!config.metrics_address.empty())
     validate_address(config.metrics_address, "--metrics-address");
-  check_exposure(config);
+  check_exposure(config.address, config.metrics_address, config.security);
   if (config.security.insecure &&
       (!is_loopback_address(config.address) || !config.security.tls.enabled())) {
     log_event(config.log_name, "insecure",
@@ -62,7 +57,7 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   auto credentials = server_credentials(config.security.tls);
   if (config.security.policy)
     credentials->SetAuthMetadataProcessor(
-        make_policy_processor(config.security.policy, config.log_name));
+        make_policy_processor(config.security.policy, config.log_name, config.security.audit));
   if (config.metrics == nullptr && !config.metrics_address.empty())
     throw_invalid_argument("metrics", "a registry to serve on " + config.metrics_address, "none");
   // Before gRPC starts: a metrics port that cannot listen fails the server whole.

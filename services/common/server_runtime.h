@@ -34,11 +34,18 @@ struct ServerSecurity {
   store::AuditTrail* audit = nullptr;  // null: the audit goes to the JSON log only
 };
 
+// Refuses (FAILED_PRECONDITION, naming the flag) what would expose an unauthenticated
+// port beyond this machine: plaintext gRPC or /metrics off loopback without `insecure`, or
+// a policy without TLS. ServerRuntime checks it; a main checks it first too, before it
+// starts work a refusal would waste.
+void check_exposure(const std::string& address, const std::string& metrics_address,
+                    const ServerSecurity& security);
+
 struct ServerConfig {
   std::string address = "127.0.0.1:0";
   int max_message_bytes = 4 << 20;
-  std::vector<grpc::Service*> services;
-  std::vector<std::string> service_names;  // full names, for the health service
+  std::vector<grpc::Service*> services{};
+  std::vector<std::string> service_names{};  // full names, for the health service
   // Per-RPC metrics (rpc_metrics.h) when set; must outlive the runtime. The explicit
   // initialisers keep GCC 12 quiet about shorter aggregate initialisations.
   MetricsRegistry* metrics = nullptr;

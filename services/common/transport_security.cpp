@@ -14,8 +14,7 @@ namespace {
 
 std::string read_file(const std::string& path, std::string_view flag) {
   std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw_invalid_argument(flag, "a readable file", "\"" + path + "\" (cannot be opened)");
+  if (!in) throw_invalid_argument(flag, "a readable file", "\"" + path + "\" (cannot be opened)");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
@@ -52,10 +51,10 @@ class BearerToken final : public grpc::MetadataCredentialsPlugin {
 
 void validate(const ServerTlsFiles& files) {
   if (files.cert.empty() != files.key.empty()) {
-    throw_invalid_argument(files.cert.empty() ? "--tls-cert" : "--tls-key",
-                           "given together with " +
-                               std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
-                           "only one of them");
+    throw_invalid_argument(
+        files.cert.empty() ? "--tls-cert" : "--tls-key",
+        "given together with " + std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
+        "only one of them");
   }
   if (!files.enabled()) {
     if (!files.client_ca.empty())
@@ -71,10 +70,10 @@ void validate(const ServerTlsFiles& files) {
 
 void validate(const ClientTlsFiles& files) {
   if (files.cert.empty() != files.key.empty()) {
-    throw_invalid_argument(files.cert.empty() ? "--tls-cert" : "--tls-key",
-                           "given together with " +
-                               std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
-                           "only one of them");
+    throw_invalid_argument(
+        files.cert.empty() ? "--tls-cert" : "--tls-key",
+        "given together with " + std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
+        "only one of them");
   }
   if (!files.enabled()) {
     if (!files.cert.empty())

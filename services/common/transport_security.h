@@ -11,16 +11,16 @@
 namespace pnp::services {
 
 struct ServerTlsFiles {
-  std::string cert;       // PEM certificate chain; empty: plaintext
-  std::string key;        // PEM private key
-  std::string client_ca;  // PEM CA bundle; set: clients must present a certificate it signed
+  std::string cert;        // PEM certificate chain; empty: plaintext
+  std::string key;         // PEM private key
+  std::string client_ca;   // PEM CA bundle; set: clients must present a certificate it signed
   unsigned reload_s = 10;  // how often the files are checked for changes
   bool enabled() const { return !cert.empty(); }
 };
 
 struct ClientTlsFiles {
-  std::string ca;           // PEM roots to verify the server; empty: plaintext
-  std::string cert;         // PEM client certificate for mutual TLS (with key)
+  std::string ca;    // PEM roots to verify the server; empty: plaintext
+  std::string cert;  // PEM client certificate for mutual TLS (with key)
   std::string key;
   std::string server_name;  // the name to verify in the server's certificate, when dialling
                             // by another name (e.g. an IP)

@@ -3,6 +3,8 @@
 //   --address 127.0.0.1:50060  --db FILE (or $PNP_DB; an existing store unless --create-db)
 //   --reload-ms 500
 //   --policy hierarchy|e2e  [--metrics-address 127.0.0.1:9101]
+//   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
+//   (docs/RELIABILITY.md, "Who may do what"; operator calls are audited into --db)
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -14,6 +16,7 @@
 #include "common/error.h"
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/store_path.h"
 #include "services/inference/policy_service.h"
@@ -42,20 +45,28 @@ int main(int argc, char** argv) {
                  "DDPG+HER baseline")
       ->check(CLI::IsMember({"hierarchy", "e2e"}))
       ->capture_default_str();
+  ServerSecurityFlags security_flags;
+  add_server_security_flags(app, security_flags);
   CLI11_PARSE(app, argc, argv);
   try {
     // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
     const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
     MetricsRegistry metrics;
     const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
-    PolicyServiceImpl service(resolve_store_path(db, !create_db), kind);
+    ServerSecurity security = load_server_security(security_flags, address, metrics_address);
+    const std::string store = resolve_store_path(db, !create_db);
+    PolicyServiceImpl service(store, kind);
+    const auto audit = open_audit_trail(store, "inference");
+    security.audit = audit.get();
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
                            .services = {&service},
                            .service_names = {"pnp.policy.v1.PolicyService"},
                            // Interceptors cost every call: only when someone can scrape.
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
-                           .metrics_address = metrics_address});
+                           .metrics_address = metrics_address,
+                           .security = security,
+                           .log_name = "inference"});
     // One pair per batched actor: the three experts, or the e2e actor.
     std::vector<Gauge*> batched_requests, batches;
     for (const std::string& actor : pnp::serving::batched_actors(kind)) {

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "services/common/access_control.h"
 #include "services/common/convert.h"
 #include "services/common/status.h"
 #include "store/schema.h"
@@ -140,7 +141,7 @@ grpc::Status PolicyServiceImpl::PredictSession(
 }
 
 grpc::Status PolicyServiceImpl::PromoteCheckpoint(
-    grpc::ServerContext*, const policy::v1::PromoteCheckpointRequest* request,
+    grpc::ServerContext* context, const policy::v1::PromoteCheckpointRequest* request,
     policy::v1::PromoteCheckpointResponse* response) {
   return guarded([&] {
     std::vector<std::int64_t> ids;
@@ -158,7 +159,7 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
     {
       std::lock_guard lock(store_mutex_);
       if (!writer_) writer_.emplace(db_path_);  // the one write this service makes
-      for (const store::Promotion& promotion : writer_->promote(ids)) {
+      for (const store::Promotion& promotion : writer_->promote(ids, principal_of(*context))) {
         const store::CheckpointInfo info = writer_->checkpoint_info(promotion.checkpoint_id);
         const auto latest = writer_->latest_checkpoint(info.run_id);
         auto* out = response->add_promoted();
@@ -199,6 +200,7 @@ grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
       role->set_checkpoint_id(p.checkpoint_id);
       role->mutable_promote_time()->set_seconds(p.promoted_ms / 1000);
       role->mutable_promote_time()->set_nanos(static_cast<int>(p.promoted_ms % 1000) * 1'000'000);
+      role->set_promoted_by(p.promoted_by);
     }
     const auto served = served_.load();
     response->set_ready(served != nullptr);

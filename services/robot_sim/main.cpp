@@ -3,6 +3,8 @@
 // episodes), for driving with pnp-robot-gateway without hardware.
 //   --address 127.0.0.1:50070  --object block  --clock realtime|lockstep
 //   [--limits deploy/robot/controller.json] [--metrics-address 127.0.0.1:9107]
+//   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
+//   [--audit-db FILE]  (docs/RELIABILITY.md, "Who may do what")
 // The limits file is the controller's own (workspace, table plane, step, speed, target
 // age): nothing over the network changes it.
 
@@ -12,6 +14,7 @@
 
 #include "common/error.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/robot_sim/robot_controller_service.h"
 
@@ -40,8 +43,13 @@ int main(int argc, char** argv) {
                  "defaults, the same values)");
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
+  ServerSecurityFlags security_flags;
+  add_server_security_flags(app, security_flags, /*audit_db_flag=*/true);
   CLI11_PARSE(app, argc, argv);
   try {
+    ServerSecurity security = load_server_security(security_flags, address, metrics_address);
+    const auto audit = open_audit_trail(security_flags.audit_db, "robot_sim");
+    security.audit = audit.get();
     pnp::arm_sim::StandInOptions options;
     options.object = pnp::sim::parse_object(object, "--object");
     options.world = pnp::sim::parse_world_profile(world, "--world");
@@ -58,7 +66,9 @@ int main(int argc, char** argv) {
                            .service_names = {"pnp.robot.v1.RobotControllerService",
                                              "pnp.robot.v1.SimulatedSceneService"},
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
-                           .metrics_address = metrics_address});
+                           .metrics_address = metrics_address,
+                           .security = security,
+                           .log_name = "robot_sim"});
     return serve_until_terminated(runtime, "robot_sim", [] {}, std::chrono::seconds(1),
                                   {{"object", object},
                                    {"world", world},

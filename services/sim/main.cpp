@@ -1,11 +1,14 @@
 // pnp-sim-server: batches of pick-and-place environments behind SimulationService.
 //   --address 127.0.0.1:50051  [--metrics-address 127.0.0.1:9100]
+//   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
+//   (docs/RELIABILITY.md, "Who may do what")
 
 #include <CLI/CLI.hpp>
 #include <chrono>
 
 #include "common/error.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/sim/sim_service.h"
 
@@ -19,8 +22,13 @@ int main(int argc, char** argv) {
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
+  ServerSecurityFlags security_flags;
+  add_server_security_flags(app, security_flags, /*audit_db_flag=*/true);
   CLI11_PARSE(app, argc, argv);
   try {
+    ServerSecurity security = load_server_security(security_flags, address, metrics_address);
+    const auto audit = open_audit_trail(security_flags.audit_db, "sim");
+    security.audit = audit.get();
     MetricsRegistry metrics;
     SimServiceImpl service(&metrics);
     ServerRuntime runtime({.address = address,
@@ -29,7 +37,9 @@ int main(int argc, char** argv) {
                            .service_names = {"pnp.sim.v1.SimulationService"},
                            // Interceptors cost every call: only when someone can scrape.
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
-                           .metrics_address = metrics_address});
+                           .metrics_address = metrics_address,
+                           .security = security,
+                           .log_name = "sim"});
     return serve_until_terminated(
         runtime, "sim",
         [&] {

@@ -4,6 +4,9 @@
 //   --threads 0
 //   [--metrics-address 127.0.0.1:9102]  [--sim-address host:port]...  (rollouts on remote
 //   simulation services, round robin; default: in this process)
+//   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
+//   [--sim-tls-ca FILE [--sim-tls-cert FILE --sim-tls-key FILE] [--sim-token-file FILE]]
+//   (docs/RELIABILITY.md, "Who may do what"; operator calls are audited into --db)
 
 #include <CLI/CLI.hpp>
 #include <cstdlib>
@@ -17,6 +20,7 @@
 #include "common/error.h"
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/store_path.h"
 #include "services/train/training_service.h"
@@ -87,6 +91,10 @@ int main(int argc, char** argv) {
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
+  ServerSecurityFlags security_flags;
+  add_server_security_flags(app, security_flags);
+  ClientTlsFiles sim_tls;  // how this server dials its --sim-address services
+  add_client_security_flags(app, sim_tls, "sim-");
   CLI11_PARSE(app, argc, argv);
   const auto port = default_ports.find(role);
   if (port == default_ports.end()) {
@@ -100,14 +108,17 @@ int main(int argc, char** argv) {
   try {
     // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
     const std::string gemm_path(pnp::nn::gemm_path_name(pnp::nn::active_gemm_path()));
+    // Before anything is created or resumed: a refused flag leaves nothing behind.
+    ServerSecurity security = load_server_security(security_flags, address, metrics_address);
+    validate(sim_tls);
     db = resolve_store_path(db, false);
     MetricsRegistry metrics;
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {
-      environments = [sim_addresses](pnp::sim::Robot robot, pnp::sim::ObjectShape object,
-                                     pnp::sim::WorldProfile world) {
+      environments = [sim_addresses, sim_tls](pnp::sim::Robot robot, pnp::sim::ObjectShape object,
+                                              pnp::sim::WorldProfile world) {
         return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object,
-                                                                   world);
+                                                                   world, sim_tls);
       };
     }
     pnp::training::RunManagerOptions options{db, role, std::string(pnp::kCodeCommit), threads,
@@ -120,6 +131,8 @@ int main(int argc, char** argv) {
     options.log = [name](const std::string& line) {
       log_event(name, "store", {{"message", line}});
     };
+    const auto audit = open_audit_trail(db, name);
+    security.audit = audit.get();
     pnp::training::RunManager manager(options);
     TrainingServiceImpl service(manager);
     ServerRuntime runtime({.address = address,
@@ -127,7 +140,9 @@ int main(int argc, char** argv) {
                            .services = {&service},
                            .service_names = {"pnp.train.v1.TrainingService"},
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
-                           .metrics_address = metrics_address});
+                           .metrics_address = metrics_address,
+                           .security = security,
+                           .log_name = name});
     TrainingGauges gauges(metrics, role);
     return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
                                   std::chrono::milliseconds(1000),

@@ -133,7 +133,7 @@ TEST(RemoteEnvironment, AnUnreachableServiceIsUnavailableNamingItsAddress) {
   }
   const std::string address = "127.0.0.1:" + std::to_string(port);
   const RemoteEnvFactory factory({address}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
-                                 sim::WorldProfile::kPaper, milliseconds(300));
+                                 sim::WorldProfile::kPaper, {}, milliseconds(300));
   std::string message;
   EXPECT_EQ(code_of([&] { factory.make(); }, &message), ErrorCode::kUnavailable);
   EXPECT_NE(message.find(address), std::string::npos) << message;

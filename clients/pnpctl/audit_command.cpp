@@ -1,0 +1,54 @@
+// audit: who called which operator or robot RPC, with what, and how it ended, read from a
+// store's audit trail (docs/RELIABILITY.md, "Who may do what"). Like gc it opens the store
+// file directly, read-only: the trail is for whoever holds the store, not for every caller.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/since_arg.h"
+#include "clients/pnpctl/table.h"
+#include "common/error.h"
+#include "store/audit_trail.h"
+
+namespace pnp::pnpctl {
+
+int audit_command(const AuditArgs& args) {
+  if (!std::filesystem::is_regular_file(args.db))
+    throw_invalid_argument("--db", "an existing store file", "\"" + args.db + "\" (no such file)");
+  const std::int64_t now = std::chrono::duration_cast<std::chrono::milliseconds>(
+                               std::chrono::system_clock::now().time_since_epoch())
+                               .count();
+  const std::int64_t since = args.since.empty() ? 0 : parse_since(args.since, now, "--since");
+  const auto records = store::read_audit(args.db, since, args.limit);
+  if (args.json) {
+    for (const store::AuditRecord& r : records) {
+      std::printf("%s\n", nlohmann::json{{"id", r.id},
+                                         {"time", utc_text(r.ts_ms)},
+                                         {"ts_ms", r.ts_ms},
+                                         {"service", r.service},
+                                         {"principal", r.principal},
+                                         {"peer", r.peer},
+                                         {"rpc", r.rpc},
+                                         {"code", r.code},
+                                         {"request", r.request}}
+                              .dump()
+                              .c_str());
+    }
+    return 0;
+  }
+  Table table({"time", "service", "principal", "rpc", "code", "peer", "request"});
+  for (const store::AuditRecord& r : records) {
+    // "/pnp.policy.v1.PolicyService/PromoteCheckpoint" -> "PolicyService/PromoteCheckpoint"
+    const auto slash = r.rpc.rfind('/');
+    const auto dot = r.rpc.rfind('.', slash);
+    const std::string rpc = dot == std::string::npos ? r.rpc : r.rpc.substr(dot + 1);
+    table.add({utc_text(r.ts_ms), r.service, r.principal.empty() ? "-" : r.principal, rpc, r.code,
+               r.peer, r.request});
+  }
+  table.print(stdout);
+  return 0;
+}
+
+}  // namespace pnp::pnpctl
