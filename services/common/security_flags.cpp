@@ -1,19 +1,28 @@
 #include "services/common/security_flags.h"
 
+#include <cctype>
+
 namespace pnp::services {
 
 void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags, bool audit_db_flag) {
-  app.add_option("--tls-cert", flags.tls.cert, "PEM certificate chain: serve TLS");
-  app.add_option("--tls-key", flags.tls.key, "PEM private key of --tls-cert");
+  // Each also from the environment, so a deployment sets them once for every server.
+  app.add_option("--tls-cert", flags.tls.cert, "PEM certificate chain: serve TLS")
+      ->envname("PNP_SERVER_TLS_CERT");
+  app.add_option("--tls-key", flags.tls.key, "PEM private key of --tls-cert")
+      ->envname("PNP_SERVER_TLS_KEY");
   app.add_option("--tls-client-ca", flags.tls.client_ca,
-                 "PEM CA: require client certificates it signed (mutual TLS)");
+                 "PEM CA: require client certificates it signed (mutual TLS)")
+      ->envname("PNP_SERVER_TLS_CLIENT_CA");
   app.add_option("--tls-reload-s", flags.tls.reload_s,
                  "how often the TLS files are checked for changes (rotation)")
       ->capture_default_str();
   app.add_option("--auth-policy", flags.auth_policy,
-                 "JSON policy: which principals (token or certificate) may call what");
+                 "JSON policy: which principals (token or certificate) may call what")
+      ->envname("PNP_AUTH_POLICY");
   app.add_flag("--insecure", flags.insecure,
                "allow plaintext gRPC and /metrics on a non-loopback address");
+  app.add_flag("--public-metrics", flags.public_metrics,
+               "allow /metrics (plaintext HTTP, read-only counters) on a non-loopback address");
   if (audit_db_flag) {
     app.add_option("--audit-db", flags.audit_db,
                    "SQLite store to append the audit trail to (created if missing; empty: the "
@@ -36,6 +45,7 @@ ServerSecurity load_server_security(const ServerSecurityFlags& flags, const std:
   ServerSecurity out;
   out.tls = flags.tls;
   out.insecure = flags.insecure;
+  out.public_metrics = flags.public_metrics;
   if (!flags.auth_policy.empty())
     out.policy =
         std::make_shared<const security::AuthPolicy>(security::AuthPolicy::load(flags.auth_policy));
@@ -45,14 +55,20 @@ ServerSecurity load_server_security(const ServerSecurityFlags& flags, const std:
 
 void add_client_security_flags(CLI::App& app, ClientTlsFiles& files, const std::string& prefix) {
   const std::string p = "--" + prefix;
-  app.add_option(p + "tls-ca", files.ca, "PEM CA that signed the servers' certificates: dial TLS");
-  app.add_option(p + "tls-cert", files.cert, "PEM client certificate (mutual TLS)");
-  app.add_option(p + "tls-key", files.key, "PEM private key of the client certificate");
+  // PNP_TLS_CA... for a client's own, PNP_SIM_TLS_CA... for a trainer's simulation client.
+  std::string env = "PNP_";
+  for (const char c : prefix) env += c == '-' ? '_' : static_cast<char>(std::toupper(c));
+  app.add_option(p + "tls-ca", files.ca, "PEM CA that signed the servers' certificates: dial TLS")
+      ->envname(env + "TLS_CA");
+  app.add_option(p + "tls-cert", files.cert, "PEM client certificate (mutual TLS)")
+      ->envname(env + "TLS_CERT");
+  app.add_option(p + "tls-key", files.key, "PEM private key of the client certificate")
+      ->envname(env + "TLS_KEY");
   app.add_option(p + "tls-server-name", files.server_name,
                  "the name to verify in the servers' certificates (default: the host dialled)");
-  auto* token = app.add_option(p + "token-file", files.token_file,
-                               "file whose first line is a bearer token (TLS only)");
-  if (prefix.empty()) token->envname("PNP_TOKEN_FILE");
+  app.add_option(p + "token-file", files.token_file,
+                 "file whose first line is a bearer token (TLS only)")
+      ->envname(env + "TOKEN_FILE");
 }
 
 }  // namespace pnp::services

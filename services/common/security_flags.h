@@ -2,6 +2,7 @@
 // The command-line flags every server and client shares for transport security and
 // authorization, so each binary spells them the same way.
 //   servers: --tls-cert --tls-key [--tls-client-ca] [--tls-reload-s] [--auth-policy] [--insecure]
+//            [--public-metrics]
 //   clients: --tls-ca [--tls-cert --tls-key] [--tls-server-name] [--token-file | $PNP_TOKEN_FILE]
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,7 @@ struct ServerSecurityFlags {
   ServerTlsFiles tls;
   std::string auth_policy;  // JSON file (security/auth_policy.h); empty: none
   bool insecure = false;
+  bool public_metrics = false;
   std::string audit_db;  // a server without a store of its own: where its audit goes
 };
 

@@ -34,11 +34,12 @@ void check_exposure(const std::string& address, const std::string& metrics_addre
                     " is reachable beyond this machine: serve TLS (--tls-cert, --tls-key, "
                     "and --tls-client-ca or --auth-policy) or pass --insecure");
   }
-  if (!metrics_address.empty() && !is_loopback_address(metrics_address)) {
+  if (!metrics_address.empty() && !is_loopback_address(metrics_address) &&
+      !security.public_metrics) {
     throw Error(ErrorCode::kFailedPrecondition,
                 "--metrics-address " + metrics_address +
-                    " is plaintext HTTP reachable beyond this machine: bind it to loopback "
-                    "(scrape through a sidecar) or pass --insecure");
+                    " is plaintext HTTP reachable beyond this machine: bind it to loopback, or "
+                    "pass --public-metrics (its counters are public to the network)");
   }
 }
 

@@ -31,6 +31,7 @@ struct ServerSecurity {
   ServerTlsFiles tls{};
   std::shared_ptr<const security::AuthPolicy> policy{};  // null: every caller may call
   bool insecure = false;               // allows plaintext (gRPC, /metrics) beyond loopback
+  bool public_metrics = false;         // allows plaintext /metrics (read-only) beyond loopback
   store::AuditTrail* audit = nullptr;  // null: the audit goes to the JSON log only
 };
 

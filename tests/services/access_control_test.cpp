@@ -392,6 +392,14 @@ TEST(ServerExposure, PlaintextBeyondLoopbackIsRefusedUnlessInsecure) {
   EXPECT_NE(refused({.address = "127.0.0.1:0", .services = {&controller}, .security = with_policy})
                 .find("--auth-policy needs TLS"),
             std::string::npos);
+  ServerSecurity public_metrics;
+  public_metrics.public_metrics = true;
+  EXPECT_EQ(refused({.address = "127.0.0.1:0",
+                     .services = {&controller},
+                     .metrics = &metrics,
+                     .metrics_address = "0.0.0.0:0",
+                     .security = public_metrics}),
+            "");
   ServerSecurity insecure;
   insecure.insecure = true;
   EXPECT_EQ(refused({.address = "0.0.0.0:0", .services = {&controller}, .security = insecure}), "");
