@@ -30,6 +30,23 @@ void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags, bool a
   }
 }
 
+void add_stream_limit_flags(CLI::App& app, StreamLimitOptions& options, double& idle_timeout_s) {
+  app.add_option("--max-streams", options.max_streams,
+                 "streaming calls open at once; beyond, RESOURCE_EXHAUSTED")
+      ->check(CLI::Range(1, 100'000))
+      ->capture_default_str();
+  idle_timeout_s = std::chrono::duration<double>(options.idle_timeout).count();
+  app.add_option("--stream-idle-timeout-s", idle_timeout_s,
+                 "a session or rollout stream with no message either way for this long is closed")
+      ->check(CLI::Range(0.01, 86'400.0))
+      ->capture_default_str();
+}
+
+StreamLimitOptions stream_limit_options(StreamLimitOptions options, double idle_timeout_s) {
+  options.idle_timeout = std::chrono::milliseconds(static_cast<long long>(idle_timeout_s * 1000));
+  return options;
+}
+
 std::unique_ptr<store::AuditTrail> open_audit_trail(const std::string& db,
                                                     std::string_view service) {
   if (db.empty()) return nullptr;

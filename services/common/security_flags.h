@@ -1,6 +1,6 @@
 #pragma once
-// The command-line flags every server and client shares for transport security and
-// authorization, so each binary spells them the same way.
+// The command-line flags every server and client shares for transport security,
+// authorization and resource limits, so each binary spells them the same way.
 //   servers: --tls-cert --tls-key [--tls-client-ca] [--tls-reload-s] [--auth-policy] [--insecure]
 //            [--public-metrics]
 //   clients: --tls-ca [--tls-cert --tls-key] [--tls-server-name] [--token-file | $PNP_TOKEN_FILE]
@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "services/common/server_runtime.h"
+#include "services/common/stream_limits.h"
 #include "services/common/transport_security.h"
 
 namespace pnp::services {
@@ -22,6 +23,10 @@ struct ServerSecurityFlags {
   bool public_metrics = false;
   std::string audit_db;  // a server without a store of its own: where its audit goes
 };
+
+// --max-streams N, --stream-idle-timeout-s S (services/common/stream_limits.h).
+void add_stream_limit_flags(CLI::App& app, StreamLimitOptions& options, double& idle_timeout_s);
+StreamLimitOptions stream_limit_options(StreamLimitOptions options, double idle_timeout_s);
 
 // `audit_db_flag`: also --audit-db FILE, for a server that has no --db to audit into.
 void add_server_security_flags(CLI::App& app, ServerSecurityFlags& flags,

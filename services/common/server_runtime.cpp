@@ -71,6 +71,15 @@ ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service
   // Off: with SO_REUSEPORT a second server on a port in use binds too, and the kernel then
   // spreads the clients over two servers (two stores, two policies).
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+  // Connections whose client vanished (no TCP reset) are found by keepalive pings and
+  // closed with their streams; clients may ping at most every 10 s without data, two
+  // strikes; a connection with no call for 30 min is closed.
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 60'000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20'000);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10'000);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS, 30 * 60'000);
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, kMaxStreamsPerConnection);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   for (grpc::Service* s : config.services) builder.RegisterService(s);

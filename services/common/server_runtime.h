@@ -42,6 +42,10 @@ struct ServerSecurity {
 void check_exposure(const std::string& address, const std::string& metrics_address,
                     const ServerSecurity& security);
 
+// Calls one connection may have open at once (HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS);
+// a server's own limit on streaming calls is StreamLimits.
+inline constexpr int kMaxStreamsPerConnection = 512;
+
 struct ServerConfig {
   std::string address = "127.0.0.1:0";
   int max_message_bytes = 4 << 20;

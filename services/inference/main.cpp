@@ -47,6 +47,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   ServerSecurityFlags security_flags;
   add_server_security_flags(app, security_flags);
+  StreamLimitOptions limit_options;
+  double idle_timeout_s = 0;
+  add_stream_limit_flags(app, limit_options, idle_timeout_s);
   CLI11_PARSE(app, argc, argv);
   try {
     // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".
@@ -55,7 +58,8 @@ int main(int argc, char** argv) {
     const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const std::string store = resolve_store_path(db, !create_db);
-    PolicyServiceImpl service(store, kind);
+    StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "inference");
+    PolicyServiceImpl service(store, kind, &limits);
     const auto audit = open_audit_trail(store, "inference");
     security.audit = audit.get();
     ServerRuntime runtime({.address = address,

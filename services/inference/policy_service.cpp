@@ -46,8 +46,9 @@ store::RunStore open_for_serving(const std::string& path) {
 
 }  // namespace
 
-PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::PolicyKind kind)
-    : kind_(kind), db_path_(db_path), store_(open_for_serving(db_path)) {
+PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::PolicyKind kind,
+                                     StreamLimits* limits)
+    : kind_(kind), db_path_(db_path), limits_(limits), store_(open_for_serving(db_path)) {
   try {
     reload();
   } catch (const Error& e) {
@@ -120,12 +121,14 @@ grpc::Status PolicyServiceImpl::PredictSession(
     grpc::ServerReaderWriter<policy::v1::PredictSessionResponse, policy::v1::PredictSessionRequest>*
         stream) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "PredictSession");
     // The whole episode runs on the policy served when it began.
     const auto served = served_or_unavailable();
     auto controller = served->acquire();
     policy::v1::PredictSessionRequest request;
     policy::v1::PredictSessionResponse response;
     while (!context->IsCancelled() && stream->Read(&request)) {
+      slot.touch();
       const sim::Observation observation = from_proto(request.observation(), "observation");
       const sim::Goal goal = from_proto(request.goal(), "goal");
       const auto d = controller->act(observation, goal);

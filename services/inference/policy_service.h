@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "services/common/stream_limits.h"
 #include "serving/served_policy.h"
 #include "store/run_store.h"
 
@@ -23,8 +24,10 @@ namespace pnp::services {
 
 class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
  public:
+  // `limits` (null: none) bounds the PredictSession streams; it must outlive the service.
   explicit PolicyServiceImpl(const std::string& db_path,
-                             serving::PolicyKind kind = serving::PolicyKind::kHierarchy);
+                             serving::PolicyKind kind = serving::PolicyKind::kHierarchy,
+                             StreamLimits* limits = nullptr);
 
   // Loads the promoted checkpoints of the served kind if they differ from the served
   // ones; returns whether the policy changed. A failure keeps the current one and is
@@ -56,6 +59,7 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
 
   const serving::PolicyKind kind_;
   const std::string db_path_;
+  StreamLimits* const limits_;
   std::mutex store_mutex_;  // guards both connections: each is used by one thread at a time
   store::RunStore store_;   // read-only: serving
   std::optional<store::RunStore> writer_;  // opened at the first promotion

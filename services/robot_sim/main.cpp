@@ -45,6 +45,9 @@ int main(int argc, char** argv) {
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   ServerSecurityFlags security_flags;
   add_server_security_flags(app, security_flags, /*audit_db_flag=*/true);
+  StreamLimitOptions limit_options;
+  double idle_timeout_s = 0;
+  add_stream_limit_flags(app, limit_options, idle_timeout_s);
   CLI11_PARSE(app, argc, argv);
   try {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
@@ -57,7 +60,8 @@ int main(int argc, char** argv) {
                                         : pnp::arm_sim::ClockMode::kRealTime;
     if (!limits.empty()) options.limits = pnp::arm_sim::ControllerLimits::load(limits);
     pnp::arm_sim::ControllerStandIn arm(options);
-    RobotControllerServiceImpl controller(arm);
+    StreamLimits stream_limits(stream_limit_options(limit_options, idle_timeout_s), "robot_sim");
+    RobotControllerServiceImpl controller(arm, &stream_limits);
     SimulatedSceneServiceImpl scene(arm);
     MetricsRegistry metrics;
     ServerRuntime runtime({.address = address,

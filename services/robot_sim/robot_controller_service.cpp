@@ -65,8 +65,10 @@ grpc::Status RobotControllerServiceImpl::StreamPoseTargets(
     grpc::ServerReaderWriter<robot::v1::ControllerFeedback, robot::v1::StreamPoseTargetsRequest>*
         stream) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "StreamPoseTargets");
     robot::v1::StreamPoseTargetsRequest request;
     if (!stream->Read(&request)) return grpc::Status::OK;  // closed before opening
+    slot.touch();
     if (request.request_case() != robot::v1::StreamPoseTargetsRequest::kLeaseId) {
       throw_invalid_argument("request", "a lease_id as the stream's first message", "a target");
     }
@@ -88,6 +90,7 @@ grpc::Status RobotControllerServiceImpl::StreamPoseTargets(
     } forget{*this, context};
     robot::v1::ControllerFeedback feedback;
     while (!context->IsCancelled() && stream->Read(&request)) {
+      slot.touch();
       if (request.request_case() != robot::v1::StreamPoseTargetsRequest::kTarget) {
         throw_invalid_argument("request", "a target after the opening lease_id", "a lease_id");
       }

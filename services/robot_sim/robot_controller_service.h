@@ -10,12 +10,16 @@
 
 #include "arm_sim/controller_stand_in.h"
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
+#include "services/common/stream_limits.h"
 
 namespace pnp::services {
 
 class RobotControllerServiceImpl final : public robot::v1::RobotControllerService::Service {
  public:
-  explicit RobotControllerServiceImpl(arm_sim::ControllerStandIn& arm) : arm_(arm) {}
+  // `limits` (null: none) bounds the pose streams; it must outlive the service.
+  explicit RobotControllerServiceImpl(arm_sim::ControllerStandIn& arm,
+                                      StreamLimits* limits = nullptr)
+      : arm_(arm), limits_(limits) {}
 
   grpc::Status AcquireLease(grpc::ServerContext* context,
                             const robot::v1::AcquireLeaseRequest* request,
@@ -36,6 +40,7 @@ class RobotControllerServiceImpl final : public robot::v1::RobotControllerServic
 
  private:
   arm_sim::ControllerStandIn& arm_;
+  StreamLimits* limits_;
   std::mutex stream_mutex_;
   grpc::ServerContext* current_stream_ = nullptr;  // guarded by stream_mutex_
 };

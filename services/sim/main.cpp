@@ -24,13 +24,17 @@ int main(int argc, char** argv) {
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   ServerSecurityFlags security_flags;
   add_server_security_flags(app, security_flags, /*audit_db_flag=*/true);
+  StreamLimitOptions limit_options;
+  double idle_timeout_s = 0;
+  add_stream_limit_flags(app, limit_options, idle_timeout_s);
   CLI11_PARSE(app, argc, argv);
   try {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const auto audit = open_audit_trail(security_flags.audit_db, "sim");
     security.audit = audit.get();
     MetricsRegistry metrics;
-    SimServiceImpl service(&metrics);
+    StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "sim");
+    SimServiceImpl service(&metrics, &limits);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 16 << 20,
                            .services = {&service},

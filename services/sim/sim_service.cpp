@@ -117,10 +117,11 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
   }
 }
 
-SimServiceImpl::SimServiceImpl(MetricsRegistry* metrics)
+SimServiceImpl::SimServiceImpl(MetricsRegistry* metrics, StreamLimits* limits)
     : env_steps_(metrics ? &metrics->counter("pnp_env_steps_total",
                                              "Environment steps executed (Step and StreamRollout).")
-                         : nullptr) {}
+                         : nullptr),
+      limits_(limits) {}
 
 void SimServiceImpl::count_steps(const sv1::StepResponse& response) {
   if (env_steps_) env_steps_->inc(response.results_size());
@@ -227,8 +228,10 @@ grpc::Status SimServiceImpl::StreamRollout(
     grpc::ServerContext* context,
     grpc::ServerReaderWriter<sv1::StreamRolloutResponse, sv1::StreamRolloutRequest>* stream) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "StreamRollout");
     sv1::StreamRolloutRequest request;
     if (!stream->Read(&request)) return grpc::Status::OK;
+    slot.touch();
     if (request.request_case() != sv1::StreamRolloutRequest::kEnvId) {
       throw_invalid_argument("env_id", "the first message of a rollout stream to name the batch",
                              "a reset or step");
@@ -236,6 +239,7 @@ grpc::Status SimServiceImpl::StreamRollout(
     const auto batch = registry_.get(request.env_id());
     sv1::StreamRolloutResponse response;
     while (!context->IsCancelled() && stream->Read(&request)) {
+      slot.touch();
       response.Clear();
       {
         std::lock_guard lock(batch->mutex);

@@ -5,14 +5,16 @@
 
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
 #include "services/common/metrics_registry.h"
+#include "services/common/stream_limits.h"
 #include "services/sim/env_registry.h"
 
 namespace pnp::services {
 
 class SimServiceImpl final : public sim::v1::SimulationService::Service {
  public:
-  // With `metrics` (which must outlive the service), counts pnp_env_steps_total.
-  explicit SimServiceImpl(MetricsRegistry* metrics = nullptr);
+  // With `metrics` (which must outlive the service), counts pnp_env_steps_total; `limits`
+  // (null: none; must outlive it too) bounds the rollout streams.
+  explicit SimServiceImpl(MetricsRegistry* metrics = nullptr, StreamLimits* limits = nullptr);
   EnvRegistry& registry() { return registry_; }
 
   grpc::Status CreateEnv(grpc::ServerContext* context, const sim::v1::CreateEnvRequest* request,
@@ -38,6 +40,7 @@ class SimServiceImpl final : public sim::v1::SimulationService::Service {
 
   EnvRegistry registry_;
   Counter* env_steps_ = nullptr;
+  StreamLimits* limits_ = nullptr;
 };
 
 // The core of Reset and Step, shared by the unary calls and the rollout stream.

@@ -95,6 +95,9 @@ int main(int argc, char** argv) {
   add_server_security_flags(app, security_flags);
   ClientTlsFiles sim_tls;  // how this server dials its --sim-address services
   add_client_security_flags(app, sim_tls, "sim-");
+  StreamLimitOptions limit_options;
+  double idle_timeout_s = 0;
+  add_stream_limit_flags(app, limit_options, idle_timeout_s);
   CLI11_PARSE(app, argc, argv);
   const auto port = default_ports.find(role);
   if (port == default_ports.end()) {
@@ -134,7 +137,8 @@ int main(int argc, char** argv) {
     const auto audit = open_audit_trail(db, name);
     security.audit = audit.get();
     pnp::training::RunManager manager(options);
-    TrainingServiceImpl service(manager);
+    StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), name);
+    TrainingServiceImpl service(manager, &limits);
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
                            .services = {&service},

@@ -127,6 +127,9 @@ grpc::Status TrainingServiceImpl::WatchTrainingRun(
     grpc::ServerContext* context, const WatchTrainingRunRequest* request,
     grpc::ServerWriter<WatchTrainingRunResponse>* writer) {
   return guarded([&] {
+    // Counted, never closed for idleness: a queued run's watch is quiet until it starts.
+    const auto slot =
+        admit_stream(limits_, *context, "WatchTrainingRun", StreamLimits::Idle::kKeep);
     const std::int64_t id = require_run_id(request->run_id());
     std::uint64_t seen = manager_.generation();
     store::RunRecord run = manager_.get(id);

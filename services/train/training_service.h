@@ -5,13 +5,16 @@
 #include <memory>
 
 #include "pnp/train/v1/train_service.grpc.pb.h"
+#include "services/common/stream_limits.h"
 #include "training/run_manager.h"
 
 namespace pnp::services {
 
 class TrainingServiceImpl final : public train::v1::TrainingService::Service {
  public:
-  explicit TrainingServiceImpl(training::RunManager& manager) : manager_(manager) {}
+  // `limits` (null: none) bounds the watch streams; it must outlive the service.
+  explicit TrainingServiceImpl(training::RunManager& manager, StreamLimits* limits = nullptr)
+      : manager_(manager), limits_(limits) {}
 
   grpc::Status CreateTrainingRun(grpc::ServerContext* context,
                                  const train::v1::CreateTrainingRunRequest* request,
@@ -39,6 +42,7 @@ class TrainingServiceImpl final : public train::v1::TrainingService::Service {
   void fill(const store::RunRecord& run, train::v1::TrainingRun& out);
 
   training::RunManager& manager_;
+  StreamLimits* limits_;
 };
 
 }  // namespace pnp::services

@@ -1,0 +1,96 @@
+#pragma once
+// What one server's streaming calls may hold (docs/RELIABILITY.md, "Who may do what"): at
+// most `max_streams` open at once (beyond that a new one ends RESOURCE_EXHAUSTED naming the
+// flag), and a stream that carries no message either way for `idle_timeout` is cancelled, so
+// a client that opens streams and walks away cannot hold a server's threads. Each streaming
+// handler admits itself and marks its traffic:
+//
+//   auto slot = limits.admit(*context, "PredictSession");   // throws RESOURCE_EXHAUSTED
+//   while (stream->Read(&request)) { slot.touch(); ... }
+//
+// A background thread cancels idle streams; cancelling is the only way to end a blocked
+// synchronous Read from outside the handler.
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <thread>
+
+namespace pnp::services {
+
+struct StreamLimitOptions {
+  int max_streams = 256;
+  std::chrono::milliseconds idle_timeout = std::chrono::minutes(5);
+};
+
+class StreamLimits {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  // `service` names the server in the log line of each stream closed for idleness.
+  StreamLimits(StreamLimitOptions options, std::string service);
+  ~StreamLimits();
+  StreamLimits(const StreamLimits&) = delete;
+  StreamLimits& operator=(const StreamLimits&) = delete;
+
+  // Whether a stream with no message either way for idle_timeout is closed. A watch the
+  // server feeds (a training run's progress) may rightly be quiet for long.
+  enum class Idle { kClose, kKeep };
+
+  // One admitted stream; released when destroyed.
+  class Slot {
+   public:
+    static Slot none() { return Slot(nullptr, 0); }  // no limits: does nothing
+    Slot(Slot&& other) noexcept : owner_(other.owner_), id_(other.id_) { other.owner_ = nullptr; }
+    Slot(const Slot&) = delete;
+    Slot& operator=(const Slot&) = delete;
+    Slot& operator=(Slot&&) = delete;
+    ~Slot();
+    void touch();  // a message went one way or the other: not idle
+
+   private:
+    friend class StreamLimits;
+    Slot(StreamLimits* owner, std::uint64_t id) : owner_(owner), id_(id) {}
+    StreamLimits* owner_;
+    std::uint64_t id_;
+  };
+
+  // Throws pnp::Error RESOURCE_EXHAUSTED when max_streams are open.
+  Slot admit(grpc::ServerContext& context, std::string_view rpc, Idle idle = Idle::kClose);
+
+  int open_streams() const;
+  std::uint64_t closed_for_idleness() const;
+  const StreamLimitOptions& options() const { return options_; }
+
+ private:
+  struct Entry {
+    grpc::ServerContext* context;
+    std::string rpc;
+    Clock::time_point last_activity;
+    Idle idle;
+    bool cancelled = false;
+  };
+  void reap_loop(const std::stop_token& stop);
+
+  StreamLimitOptions options_;
+  std::string service_;
+  mutable std::mutex mutex_;
+  std::condition_variable_any wake_;
+  std::map<std::uint64_t, Entry> open_;
+  std::uint64_t next_id_ = 1;
+  std::uint64_t closed_idle_ = 0;
+  std::jthread reaper_;  // last: stopped before the members it uses go
+};
+
+// `limits` may be null (a service built without limits, as in tests): Slot::none().
+StreamLimits::Slot admit_stream(StreamLimits* limits, grpc::ServerContext& context,
+                                std::string_view rpc,
+                                StreamLimits::Idle idle = StreamLimits::Idle::kClose);
+
+}  // namespace pnp::services
