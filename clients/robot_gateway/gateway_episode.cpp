@@ -32,17 +32,35 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<long long>(std::ceil(seconds * 1000)));
 }
 
+// How long an episode's start waits for an unreachable inference service (restarting,
+// say) before the run gives up: nothing moves meanwhile.
+constexpr auto kInferenceStartWait = std::chrono::seconds(10);
+
 // The world the served policy was trained in: its actions are planned the way that world
-// reads them. FAILED_PRECONDITION while no whole policy is served.
-sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy) {
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+// reads them. Waits up to kInferenceStartWait for the service to be reachable (Ctrl-C
+// ends the wait within 100 ms); UNAVAILABLE after that, FAILED_PRECONDITION while no
+// whole policy is served.
+sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy,
+                               const std::atomic<bool>& interrupted) {
+  const auto give_up = std::chrono::steady_clock::now() + kInferenceStartWait;
   policy::v1::GetServingStatusResponse status;
-  const grpc::Status rpc = policy.GetServingStatus(&context, {}, &status);
+  grpc::Status rpc;
+  for (;;) {
+    grpc::ClientContext context;
+    context.set_wait_for_ready(true);  // a reconnecting channel is waited for, not failed
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(100));
+    rpc = policy.GetServingStatus(&context, {}, &status);
+    if (rpc.error_code() != grpc::StatusCode::DEADLINE_EXCEEDED &&
+        rpc.error_code() != grpc::StatusCode::UNAVAILABLE)
+      break;
+    if (interrupted.load()) throw Error(ErrorCode::kCancelled, "waiting for the inference service");
+    if (std::chrono::steady_clock::now() >= give_up) break;
+  }
   if (!rpc.ok()) {
     throw Error(ErrorCode::kUnavailable, "the inference service's GetServingStatus failed (code " +
-                                             std::to_string(rpc.error_code()) +
-                                             "): " + rpc.error_message());
+                                             std::to_string(rpc.error_code()) + ") for " +
+                                             std::to_string(kInferenceStartWait.count()) +
+                                             " s: " + rpc.error_message());
   }
   if (!status.ready() || status.roles().empty()) {
     throw Error(ErrorCode::kFailedPrecondition,
@@ -144,7 +162,7 @@ void GatewayEpisodeRunner::check_controller_tcp() {
 
 EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
                                         const std::atomic<bool>& interrupted) {
-  const sim::WorldProfile world = served_world(policy_);  // before anything moves
+  const sim::WorldProfile world = served_world(policy_, interrupted);  // before anything moves
   check_controller_tcp();
   Episode episode(options, interrupted, policy_, world);
   episode.report.seed = options.seed;

@@ -85,7 +85,13 @@ int main(int argc, char** argv) {
     } wake{finished};
     const auto timeout = std::chrono::milliseconds(2000);
     auto controller_channel = services::dial(controller_address, tls);
-    auto inference_channel = services::dial(inference_address, tls);
+    // A restarted inference service is found again within 0.1-1 s (gRPC's default
+    // backoff grows to 120 s), so the next episode need not wait long for it.
+    grpc::ChannelArguments inference_args;
+    inference_args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 100);
+    inference_args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 100);
+    inference_args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 1000);
+    auto inference_channel = services::dial(inference_address, tls, inference_args);
     for (auto& [channel, address] : {std::pair{controller_channel, controller_address},
                                      std::pair{inference_channel, inference_address}}) {
       if (!channel->WaitForConnected(std::chrono::system_clock::now() + timeout)) {

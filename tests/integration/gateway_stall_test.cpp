@@ -3,7 +3,8 @@
 // pnp-robot-gateway drives it; the controller process is then paused (SIGSTOP) in the
 // middle of an episode, as a controller that stops answering is. The gateway must end
 // that episode on its dead-man and go on with the next, and Ctrl-C during a stall must
-// end it at once.
+// end it at once. The inference service killed mid-episode (SIGKILL) and restarted must
+// cost the gateway that episode only.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -29,6 +30,7 @@ struct RobotCell {
                   {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db",
                    served_store(dir)},
                   dir.path()),
+        db(dir.file("pnp.db")),
         controller("robot_sim",
                    {PNP_BIN_DIR "/pnp-robot-sim", "--address", "127.0.0.1:0", "--clock", "realtime",
                     "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"},
@@ -53,6 +55,7 @@ struct RobotCell {
   }
 
   ChildProcess inference;
+  std::string db;
   ChildProcess controller;
 };
 
@@ -119,6 +122,31 @@ TEST(GatewayStall, CtrlCDuringAStallEndsTheGatewayAtOnce) {
   EXPECT_TRUE(status->exited) << status->describe();
   EXPECT_EQ(status->code, 130) << gateway.diagnostics();
   EXPECT_LT(seconds, 1.0) << gateway.diagnostics();
+}
+
+TEST(InferenceFault, AKilledInferenceServiceCostsTheEpisodeAndARestartedOneServesTheNext) {
+  TempDir dir("inference_killed");
+  RobotCell cell(dir);
+  const int port = cell.inference.port();
+  std::optional<ChildProcess> driving;
+  ASSERT_NO_FATAL_FAILURE(start_driving(cell, dir, 6, driving));
+  ChildProcess& gateway = *driving;
+  cell.inference.kill();
+  ASSERT_TRUE(cell.inference.wait(30s));
+  ChildProcess restarted("inference-again",
+                         {PNP_BIN_DIR "/pnp-inference-server", "--address",
+                          "127.0.0.1:" + std::to_string(port), "--db", cell.db},
+                         dir.path());
+  ASSERT_GT(restarted.port(), 0) << restarted.diagnostics();
+  const auto status = gateway.wait(120s);
+  ASSERT_TRUE(status) << gateway.diagnostics();
+  EXPECT_TRUE(status->ok()) << gateway.diagnostics();
+  const nlohmann::json summary = nlohmann::json::parse(gateway.stdout_text());
+  EXPECT_EQ(summary["episodes"], 6) << summary.dump();
+  const auto& ends = summary["ends"];
+  EXPECT_GE(ends.value("deadman", 0) + ends.value("controller_fault", 0), 1) << summary.dump();
+  EXPECT_GE(ends.value("success", 0) + ends.value("step_cap", 0), 1)
+      << "no episode after the restart completed: " << summary.dump();
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 // the same run resumes from its last checkpoint with its learning curve intact. Two
 // services of one role on one file never train one run together, and the survivor takes
 // over a killed one's run once its lease expires; a store locked by another process for
-// 15 s pauses a run, which then finishes.
+// 15 s pauses a run, which then finishes. A simulation service killed under a trainer's
+// rollouts fails the run with the reason, and a restarted one serves the next run.
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -60,13 +61,9 @@ tv1::CreateTrainingRunRequest endless_run() {
 class Trainer {
  public:
   // A short lease: a killed server's run is taken over (or resumed) within a second.
-  Trainer(const TempDir& dir, const std::string& name)
-      : process_(
-            name,
-            {std::string(PNP_BIN_DIR) + "/pnp-train-server", "--role", "approach", "--address",
-             "127.0.0.1:0", "--db", dir.file("pnp.db"), "--threads", "1", "--run-lease-s", "1"},
-            dir.path()),
-        port_(process_.port()) {
+  // `extra`: more flags (--sim-address ...).
+  Trainer(const TempDir& dir, const std::string& name, const std::vector<std::string>& extra = {})
+      : process_(name, args(dir, extra), dir.path()), port_(process_.port()) {
     if (port_ > 0) {
       stub_ = tv1::TrainingService::NewStub(
           grpc::CreateChannel(loopback(port_), grpc::InsecureChannelCredentials()));
@@ -115,6 +112,21 @@ class Trainer {
   }
 
  private:
+  static std::vector<std::string> args(const TempDir& dir, const std::vector<std::string>& extra) {
+    std::vector<std::string> a = {std::string(PNP_BIN_DIR) + "/pnp-train-server",
+                                  "--role",
+                                  "approach",
+                                  "--address",
+                                  "127.0.0.1:0",
+                                  "--db",
+                                  dir.file("pnp.db"),
+                                  "--threads",
+                                  "1",
+                                  "--run-lease-s",
+                                  "1"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  }
   static std::unique_ptr<grpc::ClientContext> context() {
     auto c = std::make_unique<grpc::ClientContext>();
     c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
@@ -438,6 +450,59 @@ TEST(RunOwnership, AStoreLockedForFifteenSecondsPausesARunWhichThenSucceeds) {
   const auto stopped = trainer.stop();
   ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
   expect_one_trainer(StoreReader(db), run_id);
+}
+
+// The simulation service a trainer rolls out on (--sim-address) is killed mid-run: the
+// run fails naming the service and why, the store stays sound, the training service stays
+// up, and once the simulation service is back on its port the next run trains through it.
+TEST(SimulationFault, AKilledSimulationServiceFailsTheRunClearlyAndARestartedOneServesTheNext) {
+  TempDir dir("sim_killed");
+  auto sim = std::make_unique<ChildProcess>(
+      "sim", std::vector<std::string>{PNP_BIN_DIR "/pnp-sim-server", "--address", "127.0.0.1:0"},
+      dir.path());
+  const int sim_port = sim->port();
+  ASSERT_GT(sim_port, 0) << sim->diagnostics();
+  Trainer trainer(dir, "train", {"--sim-address", loopback(sim_port)});
+  ASSERT_TRUE(trainer.started()) << trainer.process().diagnostics();
+  const std::int64_t run_id = trainer.create(endless_run()).run_id();
+  wait_for_evaluations(trainer, run_id, 1);  // rolling out on the service
+  sim->kill();
+  ASSERT_TRUE(sim->wait(kGuard)) << sim->diagnostics();
+  tv1::TrainingRun run;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        run = trainer.get(run_id);
+        return finished(run);
+      },
+      kGuard, 100ms))
+      << trainer.process().diagnostics();
+  EXPECT_EQ(run.state(), tv1::RUN_STATE_FAILED);
+  EXPECT_NE(run.error().find("simulation service"), std::string::npos) << run.error();
+  EXPECT_NE(run.error().find(loopback(sim_port)), std::string::npos) << run.error();
+  EXPECT_NE(run.error().find("UNAVAILABLE"), std::string::npos) << run.error();
+  EXPECT_EQ(StoreReader(dir.file("pnp.db")).text("PRAGMA integrity_check"), "ok");
+  EXPECT_TRUE(trainer.process().running());
+  // Back on the same port: the trainer's channel reconnects for the next run.
+  sim = std::make_unique<ChildProcess>(
+      "sim-again",
+      std::vector<std::string>{PNP_BIN_DIR "/pnp-sim-server", "--address", loopback(sim_port)},
+      dir.path());
+  ASSERT_GT(sim->port(), 0) << sim->diagnostics();
+  auto again = endless_run();
+  again.mutable_stop()->set_max_steps(400);
+  const std::int64_t next = trainer.create(again).run_id();
+  ASSERT_TRUE(wait_until(
+      [&] {
+        run = trainer.get(next);
+        return finished(run);
+      },
+      kGuard, 100ms))
+      << trainer.process().diagnostics();
+  EXPECT_EQ(run.state(), tv1::RUN_STATE_SUCCEEDED) << run.error();
+  EXPECT_GE(run.env_steps(), 400);
+  const auto stopped = trainer.stop();
+  ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
+  EXPECT_TRUE(sim->terminate_and_wait(kGuard));
 }
 
 // A checkpoint file imported into the store while a training server runs (a hierarchy
