@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <system_error>
 
 #include "common/error.h"
 #include "store/retry.h"
@@ -19,27 +20,33 @@ std::string file_of(sqlite3* db) {
 // read-only file FAILED_PRECONDITION (retrying will not help, an operator must); a damaged
 // file is DATA_LOSS. Every message names the file.
 [[noreturn]] void fail(sqlite3* db, int code, std::string_view what) {
-  const std::string message = "store " + file_of(db) + ": " + std::string(what) + ": " +
-                              (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
-  switch (code & 0xff) {
+  std::string message = "store " + file_of(db) + ": " + std::string(what) + ": " +
+                        (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
+  // The operating system's word for an I/O failure says which: no space, file too large...
+  const int os_error = db ? sqlite3_system_errno(db) : 0;
+  const int primary = code & 0xff;
+  if (os_error != 0 && (primary == SQLITE_IOERR || primary == SQLITE_FULL ||
+                        primary == SQLITE_CANTOPEN || primary == SQLITE_READONLY))
+    message += " (" + std::error_code(os_error, std::generic_category()).message() + ")";
+  switch (primary) {
     case SQLITE_BUSY:
     case SQLITE_LOCKED:
       throw BusyError(message);
     case SQLITE_CORRUPT:
     case SQLITE_NOTADB:
-      throw Error(ErrorCode::kDataLoss, message);
+      throw StoreError(ErrorCode::kDataLoss, message);
     case SQLITE_CONSTRAINT:
-      throw Error(ErrorCode::kFailedPrecondition, message);
+      throw StoreError(ErrorCode::kFailedPrecondition, message);
     case SQLITE_FULL:
-      throw Error(ErrorCode::kResourceExhausted, message + " (the disk is full)");
+      throw StoreError(ErrorCode::kResourceExhausted, message + " (the disk is full)");
     case SQLITE_READONLY:
-      throw Error(ErrorCode::kFailedPrecondition, message + " (the file is read-only)");
+      throw StoreError(ErrorCode::kFailedPrecondition, message + " (the file is read-only)");
     case SQLITE_CANTOPEN:
-      throw Error(ErrorCode::kFailedPrecondition, message);
+      throw StoreError(ErrorCode::kFailedPrecondition, message);
     case SQLITE_IOERR:
-      throw Error(ErrorCode::kUnavailable, message);
+      throw StoreError(ErrorCode::kUnavailable, message);
     default:
-      throw Error(ErrorCode::kInternal, message);
+      throw StoreError(ErrorCode::kInternal, message);
   }
 }
 
@@ -113,11 +120,8 @@ void Database::execute(std::string_view sql) {
   char* message = nullptr;
   const std::string text(sql);
   const int rc = sqlite3_exec(db_.get(), text.c_str(), nullptr, nullptr, &message);
-  if (rc != SQLITE_OK) {
-    const std::string what = message ? message : "";
-    sqlite3_free(message);
-    fail(db_.get(), rc, "executing \"" + text.substr(0, 60) + "\": " + what);
-  }
+  sqlite3_free(message);  // fail() takes the same text from the connection
+  if (rc != SQLITE_OK) fail(db_.get(), rc, "executing \"" + text.substr(0, 60) + "\"");
 }
 
 Statement Database::prepare(std::string_view sql) {

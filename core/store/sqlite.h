@@ -21,11 +21,18 @@ namespace pnp::store {
 
 class Statement;
 
+// Anything SQLite itself refused or failed at (the disk, the file, a lock, a constraint):
+// what a server reports as its store's health, apart from the caller's own mistakes.
+class StoreError : public Error {
+ public:
+  StoreError(ErrorCode code, const std::string& message) : Error(code, message) {}
+};
+
 // SQLITE_BUSY / SQLITE_LOCKED after the busy timeout: another connection holds the lock.
 // UNAVAILABLE, and retryable (store/retry.h): nothing was written.
-class BusyError : public Error {
+class BusyError : public StoreError {
  public:
-  explicit BusyError(const std::string& message) : Error(ErrorCode::kUnavailable, message) {}
+  explicit BusyError(const std::string& message) : StoreError(ErrorCode::kUnavailable, message) {}
 };
 
 enum class Access {

@@ -173,7 +173,14 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
                         options_.code_commit,
                         refs.parent,
                         std::string(nn::gemm_path_name(nn::active_gemm_path()))};
-  const store::RunRecord run = handler_store_.create_run(record);
+  store::RunRecord run;
+  try {
+    run = handler_store_.create_run(record);
+  } catch (const std::exception& e) {
+    note_store_write(&e);
+    throw;
+  }
+  note_store_write(nullptr);
   {
     std::lock_guard wake_lock(mutex_);
     woken_ = true;
@@ -291,6 +298,21 @@ void RunManager::report(const std::string& message) const {
   options_.log("training worker (" + options_.role + ", " + options_.owner + "): " + message);
 }
 
+void RunManager::note_store_write(const std::exception* failure) {
+  const auto* store_error = dynamic_cast<const store::StoreError*>(failure);
+  if (failure && (!store_error || dynamic_cast<const store::BusyError*>(failure))) return;
+  std::lock_guard lock(mutex_);
+  if (failure)
+    store_fault_ = failure->what();
+  else
+    store_fault_.reset();
+}
+
+std::optional<std::string> RunManager::store_fault() const {
+  std::lock_guard lock(mutex_);
+  return store_fault_;
+}
+
 void RunManager::sleep_until_woken(std::chrono::milliseconds timeout,
                                    const std::stop_token& shutdown) {
   std::unique_lock lock(mutex_);
@@ -314,8 +336,10 @@ void RunManager::work(std::stop_token shutdown) {
           [&] { return store->claim_next(options_.role, options_.owner, options_.lease); },
           shutdown);
       failures = 0;
+      if (claimed) note_store_write(nullptr);  // the claim was a write
     } catch (const std::exception& e) {
       if (shutdown.stop_requested()) return;
+      note_store_write(&e);
       report(std::string("looking for runs: ") + e.what() + "; trying again");
       if (!dynamic_cast<const store::BusyError*>(&e)) store.reset();
       store::sleep_unless_stopped(store::retry_backoff(options_.retry, failures++), shutdown);
@@ -361,7 +385,10 @@ void RunManager::heartbeat(std::stop_token shutdown) {
     }
     try {
       if (!store) store.emplace(options_.db_path);
-      if (store->renew_lease(run_id, options_.owner, options_.lease)) continue;
+      if (store->renew_lease(run_id, options_.owner, options_.lease)) {
+        note_store_write(nullptr);
+        continue;
+      }
       bool stopped = false;
       {
         std::lock_guard lock(mutex_);
@@ -380,6 +407,7 @@ void RunManager::heartbeat(std::stop_token shutdown) {
       // Tried again at the next beat. Should the lease lapse meanwhile and another manager
       // take the run, this one's next write is refused (ABORTED) and it stops then.
       report("run " + std::to_string(run_id) + ": renewing its lease: " + e.what());
+      note_store_write(&e);
       if (!dynamic_cast<const store::BusyError*>(&e)) store.reset();
     }
   }
@@ -502,6 +530,7 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
                                     options_.owner);
           },
           shutdown);
+      note_store_write(nullptr);
       if (options_.retention) {
         try {
           store.prune_checkpoints(run_id, *options_.retention);
@@ -551,6 +580,7 @@ RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecor
              ": stopped, no longer held by this server: " + e.what());
       return Turn::kFinished;
     }
+    note_store_write(&e);  // a store that failed the run makes the service unhealthy
     return finish(store, run_id, store::RunState::kFailed, e.what(), shutdown);
   }
 }

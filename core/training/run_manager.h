@@ -104,6 +104,11 @@ class RunManager {
   };
   Load load();
 
+  // Why the store cannot be used, if the last write this manager tried failed for a reason
+  // other than a busy lock (a full disk, a read-only file, an I/O error); empty once a
+  // later write succeeds. The service reports NOT_SERVING meanwhile.
+  std::optional<std::string> store_fault() const;
+
   // A counter bumped at every change to any run; wait_for_change returns when it differs
   // from `seen` or after `timeout`, with its current value.
   std::uint64_t generation() const;
@@ -132,6 +137,8 @@ class RunManager {
               const std::string& error, const std::stop_token& shutdown);
   void sleep_until_woken(std::chrono::milliseconds timeout, const std::stop_token& shutdown);
   void report(const std::string& message) const;
+  // A store write succeeded (`failure` null) or failed: store_fault() follows the last one.
+  void note_store_write(const std::exception* failure);
   void changed();
 
   RunManagerOptions options_;
@@ -144,6 +151,7 @@ class RunManager {
   bool woken_ = false;  // a run was created or cancelled since the worker last looked
   std::optional<Active> active_;
   std::uint64_t generation_ = 0;
+  std::optional<std::string> store_fault_;  // guarded by mutex_
 
   // Last: stopped and joined before the members above go.
   std::jthread worker_;

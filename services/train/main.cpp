@@ -148,8 +148,21 @@ int main(int argc, char** argv) {
                            .security = security,
                            .log_name = name});
     TrainingGauges gauges(metrics, role);
-    return serve_until_terminated(runtime, name, [&] { gauges.update(manager.load()); },
-                                  std::chrono::milliseconds(1000),
+    // NOT_SERVING while the store cannot be written: a balancer or probe routes elsewhere
+    // and an operator sees why in the log.
+    std::optional<std::string> store_fault;
+    const auto periodic = [&] {
+      gauges.update(manager.load());
+      auto fault = manager.store_fault();
+      if (fault == store_fault) return;
+      store_fault = std::move(fault);
+      runtime.set_serving(!store_fault);
+      if (store_fault)
+        log_event(name, "store_unwritable", {{"error", *store_fault}, {"serving", false}});
+      else
+        log_event(name, "store_writable", {{"serving", true}});
+    };
+    return serve_until_terminated(runtime, name, periodic, std::chrono::milliseconds(1000),
                                   {{"db", db},
                                    {"role", role},
                                    {"owner", manager.owner()},

@@ -4,7 +4,8 @@
 // services of one role on one file never train one run together, and the survivor takes
 // over a killed one's run once its lease expires; a store locked by another process for
 // 15 s pauses a run, which then finishes. A simulation service killed under a trainer's
-// rollouts fails the run with the reason, and a restarted one serves the next run.
+// rollouts fails the run with the reason, and a restarted one serves the next run. A store
+// that cannot grow fails the run clearly, keeps what it had, and the service says so.
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -18,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "grpc/health/v1/health.grpc.pb.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"
@@ -503,6 +505,70 @@ TEST(SimulationFault, AKilledSimulationServiceFailsTheRunClearlyAndARestartedOne
   const auto stopped = trainer.stop();
   ASSERT_TRUE(stopped && stopped->ok()) << trainer.process().diagnostics();
   EXPECT_TRUE(sim->terminate_and_wait(kGuard));
+}
+
+// The store's files may not grow past 300 KB (RLIMIT_FSIZE, as a full disk: writes fail
+// with an I/O error): the run fails naming the store, nothing is half-written, and the
+// training service stays up, answers reads, and reports NOT_SERVING until it can write.
+TEST(StoreFault, AStoreThatCannotGrowFailsTheRunAndTheServiceReportsNotServing) {
+  TempDir dir("store_full");
+  const std::string db = dir.file("pnp.db");
+  // SIGXFSZ ignored (and so across exec): a write past the limit fails with EFBIG instead
+  // of killing the process.
+  ChildProcess server("train",
+                      {"/bin/bash", "-c",
+                       "trap '' XFSZ; ulimit -f 300; exec \"$0\" --role approach --address "
+                       "127.0.0.1:0 --threads 1 --db \"$1\"",
+                       PNP_BIN_DIR "/pnp-train-server", db},
+                      dir.path());
+  ASSERT_GT(server.port(), 0) << server.diagnostics();
+  auto channel = grpc::CreateChannel(loopback(server.port()), grpc::InsecureChannelCredentials());
+  auto training = tv1::TrainingService::NewStub(channel);
+  auto health = grpc::health::v1::Health::NewStub(channel);
+  const auto call = [] {
+    auto c = std::make_unique<grpc::ClientContext>();
+    c->set_deadline(std::chrono::system_clock::now() + 30s);
+    return c;
+  };
+  // Networks whose first checkpoint (about 1 MB) cannot fit, while creating and claiming
+  // the run (a few KB) can.
+  auto request = endless_run();
+  request.mutable_ddpg()->clear_hidden();
+  for (int layer = 0; layer < 3; ++layer) request.mutable_ddpg()->add_hidden(256);
+  tv1::CreateTrainingRunResponse created;
+  ASSERT_TRUE(training->CreateTrainingRun(call().get(), request, &created).ok());
+  tv1::GetTrainingRunRequest get;
+  get.set_run_id(created.run().run_id());
+  tv1::GetTrainingRunResponse run;
+  ASSERT_TRUE(wait_until(
+      [&] { return training->GetTrainingRun(call().get(), get, &run).ok() && finished(run.run()); },
+      kGuard, 100ms))
+      << server.diagnostics();
+  EXPECT_EQ(run.run().state(), tv1::RUN_STATE_FAILED);
+  EXPECT_NE(run.run().error().find("store " + db), std::string::npos) << run.run().error();
+  EXPECT_NE(run.run().error().find("disk I/O error"), std::string::npos) << run.run().error();
+  grpc::health::v1::HealthCheckResponse status;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        return health->Check(call().get(), {}, &status).ok() &&
+               status.status() == grpc::health::v1::HealthCheckResponse::NOT_SERVING;
+      },
+      kGuard, 100ms))
+      << server.diagnostics();
+  EXPECT_NE(server.stderr_text().find("\"store_unwritable\""), std::string::npos);
+  EXPECT_TRUE(server.running());
+  const StoreReader store(db);
+  EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
+  // Every evaluation that made it has its checkpoint and every checkpoint its evaluation:
+  // they are committed together or not at all.
+  EXPECT_EQ(store.text("SELECT COUNT(*) FROM checkpoints c WHERE NOT EXISTS (SELECT 1 FROM "
+                       "metrics m WHERE m.run_id = c.run_id AND m.env_steps = c.env_steps)"),
+            "0");
+  EXPECT_EQ(store.text("SELECT COUNT(*) FROM metrics m WHERE NOT EXISTS (SELECT 1 FROM "
+                       "checkpoints c WHERE c.run_id = m.run_id AND c.env_steps = m.env_steps)"),
+            "0");
+  const auto stopped = server.terminate_and_wait(kGuard);
+  ASSERT_TRUE(stopped && stopped->ok()) << server.diagnostics();
 }
 
 // A checkpoint file imported into the store while a training server runs (a hierarchy
