@@ -63,14 +63,15 @@ void SegmentReplay::add_segment(const std::vector<Transition>& segment) {
 }
 
 sim::Goal SegmentReplay::next_achieved(std::size_t index) const {
-  return {next_achieved_[index * kGoal], next_achieved_[index * kGoal + 1],
-          next_achieved_[index * kGoal + 2]};
+  return {static_cast<double>(next_achieved_[index * kGoal]),
+          static_cast<double>(next_achieved_[index * kGoal + 1]),
+          static_cast<double>(next_achieved_[index * kGoal + 2])};
 }
 
 sim::TaskState SegmentReplay::next_state(std::size_t index, const sim::Goal& goal) const {
   sim::Observation o;
   for (std::size_t k = 0; k < kObs; ++k)
-    o(static_cast<Eigen::Index>(k)) = next_observation_[index * kObs + k];
+    o(static_cast<Eigen::Index>(k)) = static_cast<double>(next_observation_[index * kObs + k]);
   // The episode goal only matters to the retract/task objectives, whose goal this is.
   return sim::TaskState::from(o, goal, object_width_m_);
 }
@@ -110,7 +111,8 @@ void SegmentReplay::sample(int batch, double future_prob, Rng& rng, SampledBatch
       goal = next_achieved(future);
       ++out.relabelled;
     } else {
-      goal = {goal_[t * kGoal], goal_[t * kGoal + 1], goal_[t * kGoal + 2]};
+      goal = {static_cast<double>(goal_[t * kGoal]), static_cast<double>(goal_[t * kGoal + 1]),
+              static_cast<double>(goal_[t * kGoal + 2])};
     }
     for (std::size_t k = 0; k < kGoal; ++k)
       out.goal[i * kGoal + k] = static_cast<float>(goal(static_cast<Eigen::Index>(k)));

@@ -116,6 +116,9 @@ class RunManager {
 
  private:
   struct Active {
+    // Declared, so that std::optional<Active> is constructible inside this class too
+    // (clang evaluates that before the member initialisers below are parsed).
+    Active() noexcept {}  // NOLINT(modernize-use-equals-default)
     std::int64_t run_id = 0;
     std::stop_source stop;
     std::chrono::steady_clock::time_point started;

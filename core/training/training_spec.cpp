@@ -2,6 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "common/error.h"
 
@@ -110,13 +116,49 @@ nlohmann::json to_json(const TrainingSpec& s) {
 namespace {
 
 template <typename T>
+struct IsVector : std::false_type {};
+template <typename T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+// `value` as a T, refused (naming `field`) unless it is one exactly: an integer field takes
+// only integers within its range (JSON's 3.5 or 1e70 would otherwise be cast, undefined
+// behaviour for the latter), a flag only true or false.
+template <typename T>
+T checked(const nlohmann::json& value, const std::string& field) {
+  const auto refuse = [&](const char* expected) -> T {
+    throw_invalid_argument(field, expected, value.dump());
+  };
+  if constexpr (std::is_same_v<T, bool>) {
+    return value.is_boolean() ? value.get<bool>() : refuse("true or false");
+  } else if constexpr (std::is_integral_v<T>) {
+    if (value.is_number_unsigned() && std::in_range<T>(value.get<std::uint64_t>()))
+      return static_cast<T>(value.get<std::uint64_t>());
+    if (value.is_number_integer() && std::in_range<T>(value.get<std::int64_t>()))
+      return static_cast<T>(value.get<std::int64_t>());
+    return refuse(std::is_signed_v<T> ? "an integer in range" : "a non-negative integer in range");
+  } else if constexpr (std::is_floating_point_v<T>) {
+    if (!value.is_number()) return refuse("a number");
+    const double number = value.get<double>();
+    if (std::isfinite(number) && std::abs(number) > std::numeric_limits<T>::max())
+      return refuse("a number in range");
+    return static_cast<T>(number);
+  } else if constexpr (IsVector<T>::value) {
+    if (!value.is_array()) return refuse("a list");
+    T out;
+    for (std::size_t i = 0; i < value.size(); ++i)
+      out.push_back(
+          checked<typename T::value_type>(value[i], field + "[" + std::to_string(i) + "]"));
+    return out;
+  } else {
+    if (!value.is_string()) return refuse("a string");
+    return value.get<T>();
+  }
+}
+
+template <typename T>
 void read(const nlohmann::json& object, const char* key, T& out, const std::string& path) {
   if (!object.contains(key)) return;
-  try {
-    out = object.at(key).get<T>();
-  } catch (const nlohmann::json::exception&) {
-    throw_invalid_argument(path + key, "a value of the right type", object.at(key).dump());
-  }
+  out = checked<T>(object.at(key), path + key);
 }
 
 }  // namespace
