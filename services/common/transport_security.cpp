@@ -47,15 +47,19 @@ class BearerToken final : public grpc::MetadataCredentialsPlugin {
   std::string header_;
 };
 
+// A certificate without its key, or a key without its certificate.
+void require_whole_pair(const std::string& cert, const std::string& key) {
+  if (cert.empty() == key.empty()) return;
+  throw_invalid_argument(
+      cert.empty() ? "--tls-cert" : "--tls-key",
+      "given together with " + std::string(cert.empty() ? "--tls-key" : "--tls-cert"),
+      "only one of them");
+}
+
 }  // namespace
 
 void validate(const ServerTlsFiles& files) {
-  if (files.cert.empty() != files.key.empty()) {
-    throw_invalid_argument(
-        files.cert.empty() ? "--tls-cert" : "--tls-key",
-        "given together with " + std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
-        "only one of them");
-  }
+  require_whole_pair(files.cert, files.key);
   if (!files.enabled()) {
     if (!files.client_ca.empty())
       throw_invalid_argument("--tls-client-ca", "only with --tls-cert and --tls-key", "without");
@@ -69,12 +73,7 @@ void validate(const ServerTlsFiles& files) {
 }
 
 void validate(const ClientTlsFiles& files) {
-  if (files.cert.empty() != files.key.empty()) {
-    throw_invalid_argument(
-        files.cert.empty() ? "--tls-cert" : "--tls-key",
-        "given together with " + std::string(files.cert.empty() ? "--tls-key" : "--tls-cert"),
-        "only one of them");
-  }
+  require_whole_pair(files.cert, files.key);
   if (!files.enabled()) {
     if (!files.cert.empty())
       throw_invalid_argument("--tls-cert", "only with --tls-ca (mutual TLS)", "without");

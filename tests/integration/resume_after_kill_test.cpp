@@ -151,6 +151,16 @@ bool finished(const tv1::TrainingRun& run) {
          run.state() == tv1::RUN_STATE_CANCELLED;
 }
 
+// Waits until the run has finished, leaving its last state in `run`; false after the guard.
+bool wait_for_end(Trainer& trainer, std::int64_t run_id, tv1::TrainingRun& run) {
+  return wait_until(
+      [&] {
+        run = trainer.get(run_id);
+        return finished(run);
+      },
+      kGuard, 100ms);
+}
+
 // Waits until the run has at least `evaluations` evaluations (each with its checkpoint)
 // and returns their curve; fails the test if the run finishes first.
 std::vector<tv1::MetricPoint> wait_for_evaluations(Trainer& trainer, std::int64_t run_id,
@@ -440,13 +450,7 @@ TEST(RunOwnership, AStoreLockedForFifteenSecondsPausesARunWhichThenSucceeds) {
   }
   ASSERT_EQ(sqlite3_exec(raw, "ROLLBACK", nullptr, nullptr, nullptr), SQLITE_OK);
   tv1::TrainingRun run;
-  ASSERT_TRUE(wait_until(
-      [&] {
-        run = trainer.get(run_id);
-        return finished(run);
-      },
-      kGuard, 100ms))
-      << trainer.process().diagnostics();
+  ASSERT_TRUE(wait_for_end(trainer, run_id, run)) << trainer.process().diagnostics();
   EXPECT_EQ(run.state(), tv1::RUN_STATE_SUCCEEDED) << run.error();
   EXPECT_GE(run.env_steps(), 3000);
   const auto stopped = trainer.stop();
@@ -471,13 +475,7 @@ TEST(SimulationFault, AKilledSimulationServiceFailsTheRunClearlyAndARestartedOne
   sim->kill();
   ASSERT_TRUE(sim->wait(kGuard)) << sim->diagnostics();
   tv1::TrainingRun run;
-  ASSERT_TRUE(wait_until(
-      [&] {
-        run = trainer.get(run_id);
-        return finished(run);
-      },
-      kGuard, 100ms))
-      << trainer.process().diagnostics();
+  ASSERT_TRUE(wait_for_end(trainer, run_id, run)) << trainer.process().diagnostics();
   EXPECT_EQ(run.state(), tv1::RUN_STATE_FAILED);
   EXPECT_NE(run.error().find("simulation service"), std::string::npos) << run.error();
   EXPECT_NE(run.error().find(loopback(sim_port)), std::string::npos) << run.error();
@@ -493,13 +491,7 @@ TEST(SimulationFault, AKilledSimulationServiceFailsTheRunClearlyAndARestartedOne
   auto again = endless_run();
   again.mutable_stop()->set_max_steps(400);
   const std::int64_t next = trainer.create(again).run_id();
-  ASSERT_TRUE(wait_until(
-      [&] {
-        run = trainer.get(next);
-        return finished(run);
-      },
-      kGuard, 100ms))
-      << trainer.process().diagnostics();
+  ASSERT_TRUE(wait_for_end(trainer, next, run)) << trainer.process().diagnostics();
   EXPECT_EQ(run.state(), tv1::RUN_STATE_SUCCEEDED) << run.error();
   EXPECT_GE(run.env_steps(), 400);
   const auto stopped = trainer.stop();
