@@ -15,6 +15,7 @@
 #include "nn/flat_ops.h"
 #include "rl/gae.h"
 #include "rl/hlc_episode.h"
+#include "rl/network_limits.h"
 #include "rl/seed_streams.h"
 
 namespace pnp::rl {
@@ -111,8 +112,10 @@ class TicketGate {
 }  // namespace
 
 void A3cConfig::validate() const {
-  if (workers <= 0)
-    throw_invalid_argument("workers", "a positive integer", std::to_string(workers));
+  if (workers <= 0 || workers > kMaxA3cWorkers) {
+    throw_invalid_argument("workers", "1 to " + std::to_string(kMaxA3cWorkers),
+                           std::to_string(workers));
+  }
   if (!(learning_rate > 0))
     throw_invalid_argument("learning_rate", "a positive number", std::to_string(learning_rate));
   if (!(gamma > 0 && gamma <= 1))
@@ -126,8 +129,12 @@ void A3cConfig::validate() const {
     throw_invalid_argument("value_weight", "a non-negative number", std::to_string(value_weight));
   if (!(max_grad_norm > 0))
     throw_invalid_argument("max_grad_norm", "a positive number", std::to_string(max_grad_norm));
-  if (network.trunk.empty() || network.lstm <= 0)
-    throw_invalid_argument("network", "a trunk and an LSTM width", "none");
+  if (network.lstm <= 0 || network.lstm > kMaxLstmWidth) {
+    throw_invalid_argument("network.lstm", "a width from 1 to " + std::to_string(kMaxLstmWidth),
+                           std::to_string(network.lstm));
+  }
+  // The trunk feeds the LSTM's four gates.
+  check_layer_widths("network.trunk", network.trunk, network.input_size(), 4 * network.lstm);
 }
 
 std::string choice_string(const HlcEpisode& episode) {

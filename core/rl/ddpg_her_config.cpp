@@ -4,6 +4,8 @@
 #include <string>
 
 #include "common/error.h"
+#include "rl/network_limits.h"
+#include "sim/observation.h"
 
 namespace pnp::rl {
 namespace {
@@ -15,13 +17,9 @@ void require(bool ok, const char* field, const char* expected, double got) {
 }  // namespace
 
 void DdpgHerConfig::validate() const {
-  if (hidden.empty()) throw_invalid_argument("hidden", "at least one hidden layer", "none");
-  for (std::size_t i = 0; i < hidden.size(); ++i) {
-    if (hidden[i] <= 0) {
-      throw_invalid_argument("hidden[" + std::to_string(i) + "]", "a positive width",
-                             std::to_string(hidden[i]));
-    }
-  }
+  // The critic is the larger network: observation, goal and action in, one value out.
+  check_layer_widths("hidden", hidden, sim::kObservationSize + sim::kGoalSize + sim::kActionSize,
+                     1);
   if (hidden_activation != nn::Activation::kReLU && hidden_activation != nn::Activation::kELU &&
       hidden_activation != nn::Activation::kTanh) {
     throw_invalid_argument("hidden_activation", "relu, elu or tanh",
@@ -33,7 +31,10 @@ void DdpgHerConfig::validate() const {
           "a positive finite number", critic_learning_rate);
   require(gamma > 0 && gamma < 1, "gamma", "a value in (0, 1)", gamma);
   require(polyak >= 0 && polyak < 1, "polyak", "a value in [0, 1)", polyak);
-  require(batch_size > 0, "batch_size", "a positive integer", batch_size);
+  if (batch_size <= 0 || batch_size > kMaxBatchSize) {
+    throw_invalid_argument("batch_size", "1 to " + std::to_string(kMaxBatchSize),
+                           std::to_string(batch_size));
+  }
   require(buffer_size > 0, "buffer_size", "a positive integer", static_cast<double>(buffer_size));
   if (batch_size > buffer_size) {
     throw_invalid_argument("batch_size",

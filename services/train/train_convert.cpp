@@ -1,5 +1,7 @@
 #include "services/train/train_convert.h"
 
+#include <charconv>
+
 #include "common/error.h"
 #include "services/common/convert.h"
 #include "training/preset.h"
@@ -172,6 +174,19 @@ void to_proto(const store::CheckpointInfo& c, train::v1::Checkpoint& out) {
   out.set_checksum(c.checksum);
   out.set_size_bytes(c.size_bytes);
   set_millis(c.created_ms, *out.mutable_create_time());
+}
+
+std::string page_token_after(std::int64_t last_run_id) {
+  return std::to_string(last_run_id);
+}
+
+std::int64_t run_id_from_page_token(const std::string& token) {
+  if (token.empty()) return 0;
+  std::int64_t id = 0;
+  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), id);
+  if (error != std::errc() || end != token.data() + token.size() || id <= 0)
+    throw_invalid_argument("page_token", "a token from a previous response", "\"" + token + "\"");
+  return id;
 }
 
 }  // namespace pnp::services

@@ -1,6 +1,5 @@
 #include "services/train/training_service.h"
 
-#include <charconv>
 #include <chrono>
 #include <cmath>
 
@@ -18,16 +17,6 @@ using namespace train::v1;
 
 std::int64_t require_run_id(std::int64_t id) {
   if (id <= 0) throw_invalid_argument("run_id", "a positive run id", std::to_string(id));
-  return id;
-}
-
-// Page tokens are the last id of the previous page (runs come newest first).
-std::int64_t parse_page_token(const std::string& token) {
-  if (token.empty()) return 0;
-  std::int64_t id = 0;
-  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), id);
-  if (error != std::errc() || end != token.data() + token.size() || id <= 0)
-    throw_invalid_argument("page_token", "a token from a previous response", "\"" + token + "\"");
   return id;
 }
 
@@ -103,13 +92,13 @@ grpc::Status TrainingServiceImpl::ListTrainingRuns(grpc::ServerContext*,
     if (filter.limit < 1 || filter.limit > 1000)
       throw_invalid_argument("page_size", "1 to 1000 (0: 100)",
                              std::to_string(request->page_size()));
-    filter.before_id = parse_page_token(request->page_token());
+    filter.before_id = run_id_from_page_token(request->page_token());
     if (request->state() != RUN_STATE_UNSPECIFIED)
       filter.state = from_proto(request->state(), "state");
     const auto runs = manager_.list(filter);
     for (const auto& run : runs) fill(run, *response->add_runs());
     if (static_cast<int>(runs.size()) == filter.limit)
-      response->set_next_page_token(std::to_string(runs.back().id));
+      response->set_next_page_token(page_token_after(runs.back().id));
     return grpc::Status::OK;
   });
 }

@@ -86,6 +86,29 @@ TEST(A3c, RefusesInvalidConfiguration) {
   EXPECT_THROW(c.validate(), Error);
 }
 
+TEST(A3c, RefusesWorkersAndNetworksBeyondTheServersBounds) {
+  const auto refusal = [](const A3cConfig& c) -> std::string {
+    try {
+      c.validate();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  A3cConfig c;
+  EXPECT_EQ(refusal(c), "accepted");
+  c.workers = 100'000;
+  EXPECT_EQ(refusal(c), "workers: expected 1 to 64, got 100000");
+  c = {};
+  c.network.lstm = 50'000;
+  EXPECT_EQ(refusal(c), "network.lstm: expected a width from 1 to 1000, got 50000");
+  c = {};
+  c.network.trunk = {128, -3};
+  EXPECT_EQ(refusal(c), "network.trunk[1]: expected a width from 1 to 4096, got -3");
+  c.network.trunk = {};
+  EXPECT_EQ(refusal(c), "network.trunk: expected 1 to 8 hidden layers, got 0");
+}
+
 // Without predicate inputs the network reads observation and goal only, and a checkpoint
 // keeps both options (a checkpoint is served with the inputs it was trained on).
 TEST(ChoreographerCheckpoint, KeepsThePaperChoreographersInputsAndMask) {

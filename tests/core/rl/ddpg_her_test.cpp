@@ -37,6 +37,25 @@ TEST(DdpgHerConfig, OriginalBcPresetChangesOnlyTheNetworksAndSchedule) {
   EXPECT_EQ(refusal(c), "accepted");
 }
 
+// One request must not take a server's memory: widths, depth, parameters and batch are
+// bounded (rl/network_limits.h), generously beyond the paper's 3 x 256.
+TEST(DdpgHerConfig, RefusesNetworksAndBatchesBeyondTheServersBounds) {
+  DdpgHerConfig c;
+  c.hidden = {1'000'000, 1'000'000};
+  EXPECT_EQ(refusal(c), "hidden[0]: expected a width from 1 to 4096, got 1000000");
+  c.hidden = std::vector<int>(9, 64);
+  EXPECT_EQ(refusal(c), "hidden: expected 1 to 8 hidden layers, got 9");
+  c.hidden = {4096, 4096};
+  EXPECT_EQ(refusal(c),
+            "hidden: expected a network of at most 4000000 parameters, got 16920577 parameters");
+  c.hidden = {1024, 1024, 1024};
+  EXPECT_EQ(refusal(c), "accepted");
+  c = {};
+  c.batch_size = 100'000;
+  c.buffer_size = 1'000'000;
+  EXPECT_EQ(refusal(c), "batch_size: expected 1 to 4096, got 100000");
+}
+
 TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   DdpgHerConfig c;
   EXPECT_EQ(refusal(c), "accepted");
@@ -51,7 +70,7 @@ TEST(DdpgHerConfig, RefusesInvalidHyperparametersNamingTheField) {
   EXPECT_EQ(refusal(c), "gamma: expected a value in (0, 1), got 1.000000");
   c = {};
   c.hidden = {256, 0};
-  EXPECT_EQ(refusal(c), "hidden[1]: expected a positive width, got 0");
+  EXPECT_EQ(refusal(c), "hidden[1]: expected a width from 1 to 4096, got 0");
   c = {};
   c.updates_per_transition = -0.4;
   EXPECT_EQ(refusal(c),
