@@ -82,6 +82,13 @@ void ControllerLink::acquire_lease(const std::string& client_name,
   if (!response) throw Error(ErrorCode::kUnavailable, "AcquireLease (" + address_ + "): no answer");
   lease_id_ = response->lease_id();
   client_name_ = client_name;
+  lease_timeout_ = timeout;
+}
+
+void ControllerLink::reacquire_lease() {
+  if (client_name_.empty())
+    throw Error(ErrorCode::kFailedPrecondition, "no lease was acquired to take again");
+  acquire_lease(client_name_, lease_timeout_);
 }
 
 void ControllerLink::release_lease() {

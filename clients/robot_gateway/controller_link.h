@@ -34,6 +34,9 @@ class ControllerLink {
   ControllerLink& operator=(const ControllerLink&) = delete;
 
   void acquire_lease(const std::string& client_name, std::chrono::milliseconds timeout);
+  // Takes the lease again with the same name and timeout after it lapsed while nothing
+  // moved (FAILED_PRECONDITION if another client holds it meanwhile).
+  void reacquire_lease();
   void release_lease();
   bool has_lease() const { return !lease_id_.empty(); }
   const std::string& client_name() const { return client_name_; }
@@ -71,6 +74,7 @@ class ControllerLink {
   std::unique_ptr<robot::v1::RobotControllerService::Stub> controller_;
   std::unique_ptr<robot::v1::SimulatedSceneService::Stub> scene_;
   std::string lease_id_, client_name_;
+  std::chrono::milliseconds lease_timeout_{0};
 
   struct Stream;
   std::unique_ptr<Stream> stream_;

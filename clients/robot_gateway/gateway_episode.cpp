@@ -229,9 +229,16 @@ void GatewayEpisodeRunner::leave_arm_safe(Episode& episode) {
 }
 
 // The episode's start: an emergency stop or another lease holder ends the run before
-// anything moves; the gateway's own protective stop of the previous episode is cleared.
+// anything moves; the gateway's own protective stop of the previous episode is cleared. A
+// lease that lapsed between episodes (the gateway waited for a restarting inference
+// service, and the arm held meanwhile) is taken again if nobody else took it.
 bool GatewayEpisodeRunner::start_episode(Episode& episode) {
-  const rv1::GetStateResponse before = controller_.state();
+  rv1::GetStateResponse before = controller_.state();
+  if (before.lease_holder().empty() && controller_.has_lease()) {
+    controller_.reacquire_lease();
+    log_("lease_reacquired", {{"reason", "the lease lapsed between episodes"}});
+    before = controller_.state();
+  }
   if (before.lease_holder() != controller_.client_name()) {
     episode.end(EpisodeEnd::kLeaseLost, "the lease is held by \"" + before.lease_holder() +
                                             "\", not \"" + controller_.client_name() + "\"");

@@ -120,9 +120,12 @@ void Mlp::backward_into(MlpWorkspace& ws, const MatrixRef& dy, std::span<float> 
   const auto n = layers_.size();
   const Eigen::Index wc = weight_columns < 0 ? dy.cols() : weight_columns;
   if (wc > dy.cols()) throw_internal("Mlp::backward_into: more weight columns than samples");
-  ws.grad.resize(2);
+  // grad[2] holds dy; the layers' input gradients alternate between grad[0] and grad[1],
+  // so each buffer takes the same shape at every pass (dy in a buffer a layer also wrote
+  // would be resized back and forth: two allocations per pass).
+  ws.grad.resize(3);
   ws.weight_t.resize(n);  // one per layer: a shared one would reallocate at every layer
-  Matrix* upstream = &ws.grad[0];
+  Matrix* upstream = &ws.grad[2];
   ensure_shape(*upstream, dy.rows(), dy.cols());
   *upstream = dy;
   // Whether upstream is already dL/dz: the product of the layer above fused this layer's

@@ -7,6 +7,7 @@
 #include "services/common/convert.h"
 #include "services/common/sim_convert.h"
 #include "services/common/status.h"
+#include "services/common/time_convert.h"
 #include "sim/world_layout.h"
 
 namespace pnp::services {
@@ -134,10 +135,8 @@ grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEn
     const auto object = from_proto(request->object(), "object");
     const auto world = from_proto(request->world(), "world");
     std::chrono::steady_clock::duration timeout = std::chrono::seconds(300);
-    if (request->has_idle_timeout()) {
-      timeout = std::chrono::seconds(request->idle_timeout().seconds()) +
-                std::chrono::nanoseconds(request->idle_timeout().nanos());
-    }
+    if (request->has_idle_timeout())
+      timeout = from_proto(request->idle_timeout(), "idle_timeout", EnvRegistry::kMaxIdleTimeout);
     response->set_env_id(
         registry_.create(robot, object, world, request->seed(), request->count(), timeout));
     response->set_count(request->count());

@@ -551,6 +551,25 @@ TEST_F(GatewayEndToEnd, AnEmergencyStopEndsTheRunUntilAnOperatorClearsIt) {
       << episode_end_name(after.end) << ": " << after.reason;
 }
 
+// Between episodes nothing renews the lease: one that lapsed while the gateway waited (for
+// a restarting inference service, say) is taken again, unless another client took it.
+TEST_F(GatewayEndToEnd, ALeaseThatLapsedBetweenEpisodesIsTakenAgainIfNobodyElseTookIt) {
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(300));
+  GatewayEpisodeRunner runner(panda_config(), *controller_, *policy_stub_, recorder());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // lapses
+  const EpisodeReport resumed = runner.run(episode(910), not_interrupted_);
+  EXPECT_NE(resumed.end, EpisodeEnd::kLeaseLost) << resumed.reason;
+  EXPECT_EQ(count("lease_reacquired"), 1);
+
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // lapses again
+  auto other = link_to(controller_server_->port(), not_interrupted_);
+  other->acquire_lease("other", std::chrono::milliseconds(5000));
+  const EpisodeReport taken = runner.run(episode(911), not_interrupted_);
+  EXPECT_EQ(taken.end, EpisodeEnd::kLeaseLost);
+  EXPECT_NE(taken.reason.find("\"other\""), std::string::npos) << taken.reason;
+  EXPECT_EQ(taken.steps, 0);
+}
+
 TEST_F(GatewayEndToEnd, ASecondGatewayIsRefusedTheLease) {
   controller_->acquire_lease("first", std::chrono::milliseconds(5000));
   auto second = link_to(controller_server_->port(), not_interrupted_);

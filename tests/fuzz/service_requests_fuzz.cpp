@@ -191,7 +191,7 @@ class Platform {
     calls_ = {
         [&](Bytes b, const Handles& h) {
           sv1::CreateEnvResponse created;
-          if (unary(&Sim::CreateEnv, sim, "CreateEnv", b, h, &created).ok())
+          if (unary(&Sim::CreateEnv, sim, "CreateEnv", b, h, &created))
             close_env(created.env_id());  // keeps the server's 256 environments free
         },
         [&](Bytes b, const Handles& h) { unary(&Sim::Reset, sim, "Reset", b, h); },
@@ -199,7 +199,7 @@ class Platform {
         [&](Bytes b, const Handles& h) { unary(&Sim::ComputeReward, sim, "ComputeReward", b, h); },
         [&](Bytes b, const Handles& h) { unary(&Sim::GetEnvSpec, sim, "GetEnvSpec", b, h); },
         [&](Bytes b, const Handles& h) {
-          if (unary(&Sim::CloseEnv, sim, "CloseEnv", b, h).ok() && !h.env_id.empty()) open_env();
+          if (unary(&Sim::CloseEnv, sim, "CloseEnv", b, h) && !h.env_id.empty()) open_env();
         },
         [&](Bytes b, const Handles& h) {
           bidi<sv1::StreamRolloutRequest, sv1::StreamRolloutResponse>(
@@ -220,7 +220,7 @@ class Platform {
         [&](Bytes b, const Handles& h) { unary(&Policy::Ping, policy, "Ping", b, h); },
         [&](Bytes b, const Handles& h) {
           tv1::CreateTrainingRunResponse created;
-          if (unary(&Train::CreateTrainingRun, train, "CreateTrainingRun", b, h, &created).ok())
+          if (unary(&Train::CreateTrainingRun, train, "CreateTrainingRun", b, h, &created))
             cancel_run(created.run().run_id());  // one input, no lasting work
         },
         [&](Bytes b, const Handles& h) {
@@ -241,7 +241,7 @@ class Platform {
         },
         [&](Bytes b, const Handles& h) {
           rv1::AcquireLeaseResponse acquired;
-          if (unary(&Robot::AcquireLease, robot, "AcquireLease", b, h, &acquired).ok())
+          if (unary(&Robot::AcquireLease, robot, "AcquireLease", b, h, &acquired))
             handles_.lease_id = acquired.lease_id();
         },
         [&](Bytes b, const Handles& h) {
@@ -280,18 +280,18 @@ class Platform {
     return db;
   }
 
+  // Whether the call was made and succeeded (bytes that are not a request make none).
   template <typename Stub, typename Request, typename Response>
-  grpc::Status unary(grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
-                     Stub& stub, const std::string& rpc, std::span<const std::uint8_t> bytes,
-                     const Handles& handles, Response* out = nullptr) {
+  bool unary(grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
+             Stub& stub, const std::string& rpc, std::span<const std::uint8_t> bytes,
+             const Handles& handles, Response* out = nullptr) {
     Request request;
-    if (!request.ParseFromArray(bytes.data(), static_cast<int>(bytes.size())))
-      return grpc::Status::OK;
+    if (!request.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) return false;
     adopt_handles(request, handles);
     Response response;
     const auto status = (stub.*method)(context().get(), request, out ? out : &response);
     check(rpc, status);
-    return status;
+    return status.ok();
   }
 
   template <typename Request, typename Response, typename Open>

@@ -363,7 +363,7 @@ TEST(Pipeline, PnpctlReportsTheServicesRefusalsAndNothingIsStored) {
       {{"--updates-per-transition", "-0.4"},
        "updates_per_transition: expected a non-negative number (0: updates_per_cycle), got "
        "-0.400000"},
-      {{"--hidden", "0"}, "hidden[0]: expected a positive width, got 0"},
+      {{"--hidden", "0"}, "hidden[0]: expected a width from 1 to 4096, got 0"},
       {{"--algo", "a3c"},
        "algorithm: expected one of ddpg_her, bc, bc_offline for a subtask expert, got \"a3c\""},
   };

@@ -332,6 +332,10 @@ TEST_F(RobotControllerServiceTest, AStaleOrUnstampedTargetIsRefused) {
     auto future = target_above(2, 0.01);
     to_proto(std::chrono::system_clock::now() + std::chrono::seconds(10), *future.mutable_stamp());
     EXPECT_EQ(send(*drive, future)->status(), rv1::CONTROLLER_STATUS_STALE);
+    // Year 8307: beyond what the clock holds (its conversion used to overflow).
+    auto far = target_above(3, 0.01);
+    far.mutable_stamp()->set_seconds(200'000'000'000);
+    EXPECT_EQ(send(*drive, far)->status(), rv1::CONTROLLER_STATUS_STALE);
     drive->context.TryCancel();
   }
   std::swap(stub_, real_time_stub);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "common/error.h"
 #include "services/common/server_runtime.h"
@@ -93,7 +94,7 @@ TEST_F(SimServiceTest, ExplicitEpisodeSeedsGiveTheCoresEpisodes) {
   ASSERT_EQ(out.states_size(), 2);
   pnp::sim::PickPlaceEnv env(
       pnp::sim::WorldModel::load(pnp::sim::Robot::kFetch, pnp::sim::ObjectShape::kBlock,
-                                   pnp::sim::kDefaultWorldProfile));  // unset world: default
+                                 pnp::sim::kDefaultWorldProfile));  // unset world: default
   for (int i = 0; i < 2; ++i) {
     env.reset(static_cast<std::uint64_t>(11 + i));
     EXPECT_EQ(out.states(i).index(), i == 0 ? 2 : 0);
@@ -212,6 +213,16 @@ TEST_F(SimServiceTest, CreateRefusesBadWorldsAndCountsAndCloseForgets) {
   status = stub_->CreateEnv(&c2w, r, &out);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("world"), std::string::npos) << status.error_message();
+  // Found by fuzzing: a huge idle timeout used to overflow its conversion to nanoseconds.
+  grpc::ClientContext c2t;
+  r.set_world(common::v1::WORLD_UNSPECIFIED);
+  r.mutable_idle_timeout()->set_seconds(std::numeric_limits<std::int64_t>::max());
+  status = stub_->CreateEnv(&c2t, r, &out);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "idle_timeout: expected a duration from 0 to 3600 s (nanos in [0, 1e9)), got "
+            "9223372036854775807 s 0 ns");
+  r.clear_idle_timeout();
   EXPECT_EQ(service_.registry().environments(), 0);
   const std::string id = create(1);
   grpc::ClientContext c3;
