@@ -17,6 +17,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -193,6 +194,8 @@ void sim_loop(sv1::SimulationService::Stub& stub, std::uint64_t seed, Tally& tal
 }
 
 // Approach runs back to back, each to `steps`; counts finished runs, failed ones as errors.
+// Polls each run's state (once a second) so that the end of the soak cancels the run in
+// flight instead of waiting for it.
 void training_loop(tv1::TrainingService::Stub& stub, long long steps, Tally& tally,
                    std::atomic<int>& finished, const std::atomic<bool>& stop) {
   for (std::uint64_t seed = 1; !stop; ++seed) {
@@ -208,21 +211,31 @@ void training_loop(tv1::TrainingService::Stub& stub, long long steps, Tally& tal
     const auto start = Clock::now();
     if (const auto s = stub.CreateTrainingRun(call_context().get(), request, &created); !s.ok())
       return tally.error(s);
-    grpc::ClientContext context;
-    tv1::WatchTrainingRunRequest watch;
-    watch.set_run_id(created.run().run_id());
-    auto reader = stub.WatchTrainingRun(&context, watch);
-    tv1::WatchTrainingRunResponse update;
-    tv1::RunState last = tv1::RUN_STATE_UNSPECIFIED;
-    while (reader->Read(&update)) last = update.run().state();
-    if (const auto s = reader->Finish(); !s.ok()) return tally.error(s);
-    if (last == tv1::RUN_STATE_SUCCEEDED) {
-      tally.ok(micros_since(start));
-      ++finished;
-    } else if (!stop) {
-      tally.error(grpc::Status(
-          grpc::StatusCode::ABORTED,
-          "run " + std::to_string(created.run().run_id()) + " ended " + tv1::RunState_Name(last)));
+    tv1::GetTrainingRunRequest get;
+    get.set_run_id(created.run().run_id());
+    tv1::GetTrainingRunResponse run;
+    for (;;) {
+      if (const auto s = stub.GetTrainingRun(call_context().get(), get, &run); !s.ok())
+        return tally.error(s);
+      const auto state = run.run().state();
+      if (state == tv1::RUN_STATE_SUCCEEDED) {
+        tally.ok(micros_since(start));
+        ++finished;
+        break;
+      }
+      if (state == tv1::RUN_STATE_FAILED || state == tv1::RUN_STATE_CANCELLED) {
+        return tally.error(grpc::Status(grpc::StatusCode::ABORTED,
+                                        "run " + std::to_string(get.run_id()) + " ended " +
+                                            tv1::RunState_Name(state) + ": " + run.run().error()));
+      }
+      if (stop) {
+        tv1::CancelTrainingRunRequest cancel;
+        cancel.set_run_id(get.run_id());
+        tv1::CancelTrainingRunResponse cancelled;
+        stub.CancelTrainingRun(call_context().get(), cancel, &cancelled);
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::seconds(1));
     }
   }
 }
@@ -337,6 +350,12 @@ nlohmann::json soak(const Options& o) {
     leak_ok = leak_ok && alive && growth <= kRssGrowthLimit;
   }
   out["rss_window_s"] = {warm_s, samples.empty() ? 0 : samples.back().first};
+  // The whole series, so a reader tells a leak (steady growth) from a plateau.
+  for (const auto& [t, rss] : samples) {
+    nlohmann::json sample{{"t_s", std::round(t)}};
+    for (const auto& [name, kib] : rss) sample[name + "_kib"] = kib;
+    out["rss_samples"].push_back(sample);
+  }
   out["ok"] = errors == 0 && leak_ok;
   for (auto* s : servers) s->terminate_and_wait(std::chrono::seconds(20));
   std::filesystem::remove_all(dir);

@@ -74,8 +74,11 @@ struct EpisodeReport {
 
 class GatewayEpisodeRunner {
  public:
+  // Keeps references: `config`, `controller` and `policy` must outlive the runner.
   GatewayEpisodeRunner(const robot::GatewayConfig& config, ControllerLink& controller,
                        policy::v1::PolicyService::Stub& policy, EventLog log);
+  GatewayEpisodeRunner(robot::GatewayConfig&& config, ControllerLink& controller,
+                       policy::v1::PolicyService::Stub& policy, EventLog log) = delete;
 
   // Paces cycles to the policy period unless the controller runs in lockstep. Throws
   // (before anything moves) only when the run cannot drive this arm with this policy: no

@@ -554,8 +554,9 @@ TEST_F(GatewayEndToEnd, AnEmergencyStopEndsTheRunUntilAnOperatorClearsIt) {
 // Between episodes nothing renews the lease: one that lapsed while the gateway waited (for
 // a restarting inference service, say) is taken again, unless another client took it.
 TEST_F(GatewayEndToEnd, ALeaseThatLapsedBetweenEpisodesIsTakenAgainIfNobodyElseTookIt) {
+  const robot::GatewayConfig config = panda_config();  // the runner keeps a reference
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(300));
-  GatewayEpisodeRunner runner(panda_config(), *controller_, *policy_stub_, recorder());
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));  // lapses
   const EpisodeReport resumed = runner.run(episode(910), not_interrupted_);
   EXPECT_NE(resumed.end, EpisodeEnd::kLeaseLost) << resumed.reason;
