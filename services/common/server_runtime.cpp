@@ -17,6 +17,7 @@
 #include "services/common/access_control.h"
 #include "services/common/address.h"
 #include "services/common/rpc_metrics.h"
+#include "services/common/server_memory.h"
 
 namespace pnp::services {
 
@@ -44,6 +45,7 @@ void check_exposure(const std::string& address, const std::string& metrics_addre
 }
 
 ServerRuntime::ServerRuntime(const ServerConfig& config) : names_(config.service_names) {
+  keep_large_blocks_mapped();  // before the server's threads allocate
   validate_address(config.address, "--address");
   if (!config.metrics_address.empty())
     validate_address(config.metrics_address, "--metrics-address");

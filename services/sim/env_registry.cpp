@@ -38,7 +38,7 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
   }
   auto batch = std::make_shared<EnvBatch>();
   try {
-    batch->world = sim::WorldModel::load(robot, object, world);
+    batch->world = worlds_.get(robot, object, world);
     batch->seed = seed;
     for (int k = 0; k < count; ++k) batch->envs.emplace_back(batch->world);
     batch->episodes.assign(static_cast<std::size_t>(count), 0);

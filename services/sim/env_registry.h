@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sim/pick_place_env.h"
+#include "sim/world_cache.h"
 #include "sim/world_model.h"
 
 namespace pnp::services {
@@ -54,6 +55,7 @@ class EnvRegistry {
   std::map<std::string, std::shared_ptr<EnvBatch>> batches_;
   std::uint64_t next_id_ = 1;
   int environments_ = 0;
+  sim::WorldCache worlds_;  // one compiled world per robot, object and profile
 };
 
 }  // namespace pnp::services

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
+#include "support/allocation_counter.h"
 
 namespace pnp::nn {
 namespace {
@@ -125,6 +126,14 @@ TEST(Mlp, SteadyBatchBackwardDoesNotReallocate) {
   };
   const auto first = pass();
   EXPECT_EQ(pass(), first);
+  // The addresses above catch a buffer that moved; the count catches one that was freed
+  // and allocated again at the same address (glibc reuses it at once).
+  if (test::counting_allocations()) {
+    const std::size_t before = test::allocations_on_this_thread();
+    net.forward(x, ws);
+    net.backward_into(ws, dy, grads, &dx);
+    EXPECT_EQ(test::allocations_on_this_thread() - before, 0u);
+  }
 }
 
 // One pass over [A | B] with weight_columns = |A|: parameter gradients of A alone, input

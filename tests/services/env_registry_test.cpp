@@ -1,0 +1,48 @@
+#include "services/sim/env_registry.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "common/error.h"
+
+namespace pnp::services {
+namespace {
+
+using std::chrono::seconds;
+
+TEST(EnvRegistry, BatchesOfOneWorldShareItsCompiledModel) {
+  EnvRegistry registry;
+  const auto a = registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock,
+                                 sim::WorldProfile::kGym, 1, 2, seconds(60));
+  const auto b = registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock,
+                                 sim::WorldProfile::kGym, 2, 3, seconds(60));
+  const auto c = registry.create(sim::Robot::kPanda, sim::ObjectShape::kCylinder,
+                                 sim::WorldProfile::kGym, 3, 1, seconds(60));
+  EXPECT_EQ(registry.get(a)->world.get(), registry.get(b)->world.get());
+  EXPECT_NE(registry.get(a)->world.get(), registry.get(c)->world.get());
+  EXPECT_EQ(registry.get(c)->world->object(), sim::ObjectShape::kCylinder);
+  EXPECT_EQ(registry.environments(), 6);
+  // A closed batch leaves the shared world to the others.
+  registry.close(a);
+  const auto batch = registry.get(b);
+  batch->reset(0);
+  EXPECT_EQ(batch->envs[0].world().mj(), batch->world->mj());
+  EXPECT_EQ(registry.environments(), 4);
+}
+
+TEST(EnvRegistry, RefusesAnOversizedBatchNamingCount) {
+  EnvRegistry registry;
+  try {
+    registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym, 1,
+                    EnvRegistry::kMaxBatch + 1, seconds(60));
+    FAIL() << "a batch of 65 was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("count"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(registry.environments(), 0);
+}
+
+}  // namespace
+}  // namespace pnp::services
