@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/robot_convert.h"
 #include "services/common/server_runtime.h"
 #include "services/common/status.h"
@@ -136,16 +137,21 @@ grpc::Status RobotControllerServiceImpl::Stop(grpc::ServerContext*,
   });
 }
 
-grpc::Status RobotControllerServiceImpl::Resume(grpc::ServerContext*,
+std::string clearing_operator(const std::string& principal, const std::string& stated) {
+  return principal.empty() ? stated : principal;
+}
+
+grpc::Status RobotControllerServiceImpl::Resume(grpc::ServerContext* context,
                                                 const robot::v1::ResumeRequest* request,
                                                 robot::v1::ResumeResponse* response) {
   return guarded([&] {
-    const auto cleared = arm_.resume(
-        {request->lease_id(), request->acknowledged_reason(), request->operator_name()});
+    const std::string by = clearing_operator(principal_of(*context), request->operator_name());
+    const auto cleared = arm_.resume({request->lease_id(), request->acknowledged_reason(), by});
     log_event("robot_sim", "stop_cleared",
               {{"kind", arm_sim::stop_kind_name(cleared.kind)},
                {"reason", cleared.reason},
-               {"operator", request->operator_name()},
+               {"operator", by},
+               {"operator_name_stated", request->operator_name()},
                {"by_lease_holder", cleared.kind == arm_sim::StopKind::kProtective}});
     response->set_cleared_kind(to_proto(cleared.kind));
     response->set_cleared_reason(cleared.reason);

@@ -7,12 +7,19 @@
 // why.
 
 #include <mutex>
+#include <string>
 
 #include "arm_sim/controller_stand_in.h"
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
 #include "services/common/stream_limits.h"
 
 namespace pnp::services {
+
+// Who clears a stop, as logged and as the controller records it. Under an access policy it
+// is the caller's authenticated principal, whatever name the request states (kept beside
+// it in the log), so nobody can clear an emergency stop in another operator's name;
+// without a policy (`principal` empty) it is the name the request states.
+std::string clearing_operator(const std::string& principal, const std::string& stated);
 
 class RobotControllerServiceImpl final : public robot::v1::RobotControllerService::Service {
  public:

@@ -386,5 +386,13 @@ TEST_F(RobotControllerServiceTest, ResetSceneNeedsTheLeaseAndPlacesTheSeedsEpiso
   EXPECT_EQ(a.state().frame_id(), "panda_link0");
 }
 
+TEST(ClearingOperator, UnderAPolicyIsThePrincipalWhateverTheRequestStates) {
+  EXPECT_EQ(clearing_operator("ops", "mallory"), "ops");
+  EXPECT_EQ(clearing_operator("ops", ""), "ops");
+  // Without a policy there is no principal: the stated name is all there is.
+  EXPECT_EQ(clearing_operator("", "alice"), "alice");
+  EXPECT_EQ(clearing_operator("", ""), "");
+}
+
 }  // namespace
 }  // namespace pnp::services
