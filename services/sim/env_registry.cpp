@@ -48,7 +48,7 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
     throw;
   }
   batch->idle_timeout = idle_timeout;
-  batch->last_used = std::chrono::steady_clock::now();
+  batch->touch();
   std::lock_guard lock(mutex_);
   const std::string id = "env-" + std::to_string(next_id_++);
   batches_.emplace(id, std::move(batch));
@@ -61,7 +61,7 @@ std::shared_ptr<EnvBatch> EnvRegistry::get(const std::string& id) {
   if (it == batches_.end())
     throw Error(ErrorCode::kNotFound,
                 "env_id: no environment batch \"" + id + "\" (closed or expired?)");
-  it->second->last_used = std::chrono::steady_clock::now();
+  it->second->touch();
   return it->second;
 }
 
@@ -78,7 +78,7 @@ int EnvRegistry::expire(std::chrono::steady_clock::time_point now) {
   std::lock_guard lock(mutex_);
   int closed = 0;
   for (auto it = batches_.begin(); it != batches_.end();) {
-    if (now - it->second->last_used > it->second->idle_timeout) {
+    if (now - it->second->last_used.load(std::memory_order_relaxed) > it->second->idle_timeout) {
       environments_ -= static_cast<int>(it->second->envs.size());
       it = batches_.erase(it);
       ++closed;

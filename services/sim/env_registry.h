@@ -3,6 +3,7 @@
 // at a time, closed on request or after their idle timeout. Plain C++ (no gRPC), so it
 // is tested on its own. Ids are "env-<n>" from a counter: nothing here is random.
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -23,13 +24,17 @@ struct EnvBatch {
   std::vector<sim::PickPlaceEnv> envs;
   std::vector<std::uint64_t> episodes;  // episodes started, per environment
   std::chrono::steady_clock::duration idle_timeout{};
-  std::chrono::steady_clock::time_point last_used;
+  // Set by each call that uses the batch (under `mutex`) and read by the expiry sweep
+  // (under the registry's lock): atomic, since the two hold different locks.
+  std::atomic<std::chrono::steady_clock::time_point> last_used{};
   std::mutex mutex;  // one call at a time per batch
 
   // Starts the next episode of environment k: seeded from (seed, k, episode number).
   void reset(std::size_t k);
   // Starts an episode of environment k from an explicit seed (a trainer's own stream).
   void reset(std::size_t k, std::uint64_t episode_seed);
+  // Marks the batch used now (what the idle timeout counts from).
+  void touch() { last_used.store(std::chrono::steady_clock::now(), std::memory_order_relaxed); }
 };
 
 class EnvRegistry {

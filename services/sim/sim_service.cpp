@@ -242,7 +242,7 @@ grpc::Status SimServiceImpl::StreamRollout(
       response.Clear();
       {
         std::lock_guard lock(batch->mutex);
-        batch->last_used = std::chrono::steady_clock::now();
+        batch->touch();
         if (request.has_reset()) {
           reset_batch(*batch, request.reset(), *response.mutable_reset());
         } else if (request.has_step()) {
