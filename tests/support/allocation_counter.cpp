@@ -4,7 +4,9 @@
 #include <cstddef>
 #include <cstdlib>
 
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#include "common/sanitizers.h"
+
+#if defined(__GLIBC__) && !defined(PNP_SANITIZER_ALLOCATOR)
 #define PNP_COUNT_ALLOCATIONS 1
 #endif
 
