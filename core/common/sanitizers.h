@@ -11,3 +11,12 @@
 #define PNP_SANITIZER_ALLOCATOR 1
 #endif
 #endif
+
+// PNP_SANITIZER_THREAD is defined under ThreadSanitizer (GCC or clang).
+#if defined(__SANITIZE_THREAD__)
+#define PNP_SANITIZER_THREAD 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define PNP_SANITIZER_THREAD 1
+#endif
+#endif

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <mutex>
 
+#include "common/handover.h"
 #include "security/rpc_access.h"
 #include "services/common/server_runtime.h"
 #include "services/common/status.h"
@@ -56,12 +57,18 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
  public:
   PolicyProcessor(std::shared_ptr<const security::AuthPolicy> policy, std::string service,
                   store::AuditTrail* audit)
-      : policy_(std::move(policy)), service_(std::move(service)), audit_(audit) {}
+      : policy_(std::move(policy)), service_(std::move(service)), audit_(audit) {
+    publish_handover(this);  // gRPC calls and destroys it on its own threads
+  }
+  ~PolicyProcessor() override { receive_handover(this); }
+  PolicyProcessor(const PolicyProcessor&) = delete;
+  PolicyProcessor& operator=(const PolicyProcessor&) = delete;
 
   bool IsBlocking() const override { return false; }  // hashing and a table lookup
 
   grpc::Status Process(const InputMetadata& metadata, grpc::AuthContext* context,
                        OutputMetadata* consumed, OutputMetadata* /*response*/) override {
+    const HandoverScope handover(this);
     const auto path_it = metadata.find(":path");
     const std::string rpc = path_it == metadata.end() ? std::string() : text(path_it->second);
     const security::RpcAccess* access = security::find_rpc_access(rpc);
@@ -122,17 +129,25 @@ std::string request_json(const void* message) {
 class AuditInterceptor final : public gx::Interceptor {
  public:
   AuditInterceptor(gx::ServerRpcInfo* info, const std::string& service, store::AuditTrail* audit)
-      : info_(info), service_(service), audit_(audit) {}
+      : info_(info), service_(service), audit_(audit) {
+    publish_handover(this);  // gRPC calls and destroys it on its own threads
+  }
+  ~AuditInterceptor() override { receive_handover(this); }
+  AuditInterceptor(const AuditInterceptor&) = delete;
+  AuditInterceptor& operator=(const AuditInterceptor&) = delete;
 
   void Intercept(gx::InterceptorBatchMethods* methods) override {
-    if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::POST_RECV_MESSAGE) &&
-        !have_request_.exchange(true)) {
-      std::lock_guard lock(mutex_);
-      request_ = request_json(methods->GetRecvMessage());
+    {
+      const HandoverScope handover(this);
+      if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::POST_RECV_MESSAGE) &&
+          !have_request_.exchange(true)) {
+        std::lock_guard lock(mutex_);
+        request_ = request_json(methods->GetRecvMessage());
+      }
+      if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::PRE_SEND_STATUS))
+        record(methods->GetSendStatus().error_code());
     }
-    if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::PRE_SEND_STATUS))
-      record(methods->GetSendStatus().error_code());
-    methods->Proceed();
+    methods->Proceed();  // last: the call may end, and this be destroyed, from here on
   }
 
  private:

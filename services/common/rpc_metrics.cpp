@@ -10,6 +10,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "common/handover.h"
 #include "services/common/status.h"
 
 namespace pnp::services {
@@ -86,15 +87,22 @@ class RpcMetricsInterceptor final : public gx::Interceptor {
   explicit RpcMetricsInterceptor(MethodMetrics& metrics)
       : metrics_(metrics), start_(std::chrono::steady_clock::now()) {
     metrics_.in_flight().inc();
+    publish_handover(this);  // gRPC calls and destroys it on its own threads
   }
-  ~RpcMetricsInterceptor() override { finish(grpc::StatusCode::CANCELLED); }
+  ~RpcMetricsInterceptor() override {
+    receive_handover(this);
+    finish(grpc::StatusCode::CANCELLED);
+  }
   RpcMetricsInterceptor(const RpcMetricsInterceptor&) = delete;
   RpcMetricsInterceptor& operator=(const RpcMetricsInterceptor&) = delete;
 
   void Intercept(gx::InterceptorBatchMethods* methods) override {
-    if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::PRE_SEND_STATUS))
-      finish(methods->GetSendStatus().error_code());
-    methods->Proceed();
+    {
+      const HandoverScope handover(this);
+      if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::PRE_SEND_STATUS))
+        finish(methods->GetSendStatus().error_code());
+    }
+    methods->Proceed();  // last: the call may end, and this be destroyed, from here on
   }
 
  private:

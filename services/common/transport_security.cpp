@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/handover.h"
 #include "services/common/address.h"
 
 namespace pnp::services {
@@ -33,11 +34,18 @@ void require_pem(const std::string& path, std::string_view flag, std::string_vie
 // Sends `authorization: Bearer <token>` with every call on the channel.
 class BearerToken final : public grpc::MetadataCredentialsPlugin {
  public:
-  explicit BearerToken(std::string token) : header_("Bearer " + std::move(token)) {}
+  // gRPC calls and destroys the plugin on its own threads (common/handover.h).
+  explicit BearerToken(std::string token) : header_("Bearer " + std::move(token)) {
+    publish_handover(this);
+  }
+  ~BearerToken() override { receive_handover(this); }
+  BearerToken(const BearerToken&) = delete;
+  BearerToken& operator=(const BearerToken&) = delete;
   bool IsBlocking() const override { return false; }
   const char* GetType() const override { return "pnp-bearer"; }
   grpc::Status GetMetadata(grpc::string_ref, grpc::string_ref, const grpc::AuthContext&,
                            std::multimap<grpc::string, grpc::string>* metadata) override {
+    const HandoverScope handover(this);
     metadata->emplace("authorization", header_);
     return grpc::Status::OK;
   }

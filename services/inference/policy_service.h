@@ -8,13 +8,13 @@
 // swaps it atomically: requests in flight and open sessions finish on the one they
 // started with, new ones get the new one, none is dropped.
 
-#include <atomic>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "common/shared_snapshot.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "services/common/stream_limits.h"
 #include "serving/served_policy.h"
@@ -64,7 +64,7 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
   store::RunStore store_;   // read-only: serving
   std::optional<store::RunStore> writer_;  // opened at the first promotion
   std::string load_error_;  // why the last load failed (empty: it did not); store_mutex_
-  std::atomic<std::shared_ptr<const serving::ServedPolicy>> served_;
+  SharedSnapshot<serving::ServedPolicy> served_;
 };
 
 }  // namespace pnp::services
