@@ -5,10 +5,10 @@
 // so without these the constructor's writes, each call's reads and the destructor look like
 // races. They compile to nothing in other builds.
 //
-//   constructor: publish_handover(this);
-//   each call:   const HandoverScope handover(this);   (sees the constructor; its accesses
-//                                                      are seen by later calls and the end)
-//   destructor:  receive_handover(this);
+//   last member: HandedOver handed_over_;                  (publishes once the others are
+//                                                         built; receives before they go)
+//   each call:   const HandoverScope handover(handed_over_);  (sees the constructor; its
+//                                         accesses are seen by later calls and the end)
 
 #include "common/sanitizers.h"
 
@@ -32,10 +32,22 @@ inline void receive_handover([[maybe_unused]] const void* key) {
 #endif
 }
 
+// The constructor's and destructor's side, as the owner's last member: members are built
+// in order and destroyed in reverse, so it publishes after every other member is built and
+// receives before any is destroyed. Its own address is the key (it reads no member before
+// receiving). Not copyable, so neither is its owner.
+class HandedOver {
+ public:
+  HandedOver() { publish_handover(this); }
+  ~HandedOver() { receive_handover(this); }
+  HandedOver(const HandedOver&) = delete;
+  HandedOver& operator=(const HandedOver&) = delete;
+};
+
 // One call the library makes on the object: receives at entry, publishes at exit.
 class HandoverScope {
  public:
-  explicit HandoverScope(const void* key) : key_(key) { receive_handover(key_); }
+  explicit HandoverScope(const HandedOver& object) : key_(&object) { receive_handover(key_); }
   ~HandoverScope() { publish_handover(key_); }
   HandoverScope(const HandoverScope&) = delete;
   HandoverScope& operator=(const HandoverScope&) = delete;

@@ -57,18 +57,13 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
  public:
   PolicyProcessor(std::shared_ptr<const security::AuthPolicy> policy, std::string service,
                   store::AuditTrail* audit)
-      : policy_(std::move(policy)), service_(std::move(service)), audit_(audit) {
-    publish_handover(this);  // gRPC calls and destroys it on its own threads
-  }
-  ~PolicyProcessor() override { receive_handover(this); }
-  PolicyProcessor(const PolicyProcessor&) = delete;
-  PolicyProcessor& operator=(const PolicyProcessor&) = delete;
+      : policy_(std::move(policy)), service_(std::move(service)), audit_(audit) {}
 
   bool IsBlocking() const override { return false; }  // hashing and a table lookup
 
   grpc::Status Process(const InputMetadata& metadata, grpc::AuthContext* context,
                        OutputMetadata* consumed, OutputMetadata* /*response*/) override {
-    const HandoverScope handover(this);
+    const HandoverScope handover(handed_over_);
     const auto path_it = metadata.find(":path");
     const std::string rpc = path_it == metadata.end() ? std::string() : text(path_it->second);
     const security::RpcAccess* access = security::find_rpc_access(rpc);
@@ -111,6 +106,7 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
   std::shared_ptr<const security::AuthPolicy> policy_;
   std::string service_;
   store::AuditTrail* audit_;
+  HandedOver handed_over_;  // last: gRPC calls and destroys it on its own threads
 };
 
 std::string request_json(const void* message) {
@@ -129,16 +125,11 @@ std::string request_json(const void* message) {
 class AuditInterceptor final : public gx::Interceptor {
  public:
   AuditInterceptor(gx::ServerRpcInfo* info, const std::string& service, store::AuditTrail* audit)
-      : info_(info), service_(service), audit_(audit) {
-    publish_handover(this);  // gRPC calls and destroys it on its own threads
-  }
-  ~AuditInterceptor() override { receive_handover(this); }
-  AuditInterceptor(const AuditInterceptor&) = delete;
-  AuditInterceptor& operator=(const AuditInterceptor&) = delete;
+      : info_(info), service_(service), audit_(audit) {}
 
   void Intercept(gx::InterceptorBatchMethods* methods) override {
     {
-      const HandoverScope handover(this);
+      const HandoverScope handover(handed_over_);
       if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::POST_RECV_MESSAGE) &&
           !have_request_.exchange(true)) {
         std::lock_guard lock(mutex_);
@@ -179,6 +170,7 @@ class AuditInterceptor final : public gx::Interceptor {
   std::atomic<bool> have_request_{false};
   std::mutex mutex_;
   std::string request_;
+  HandedOver handed_over_;  // last: gRPC calls and destroys it on its own threads
 };
 
 class AuditFactory final : public gx::ServerInterceptorFactoryInterface {

@@ -87,18 +87,15 @@ class RpcMetricsInterceptor final : public gx::Interceptor {
   explicit RpcMetricsInterceptor(MethodMetrics& metrics)
       : metrics_(metrics), start_(std::chrono::steady_clock::now()) {
     metrics_.in_flight().inc();
-    publish_handover(this);  // gRPC calls and destroys it on its own threads
   }
   ~RpcMetricsInterceptor() override {
-    receive_handover(this);
+    receive_handover(&handed_over_);  // the body runs before handed_over_ is destroyed
     finish(grpc::StatusCode::CANCELLED);
   }
-  RpcMetricsInterceptor(const RpcMetricsInterceptor&) = delete;
-  RpcMetricsInterceptor& operator=(const RpcMetricsInterceptor&) = delete;
 
   void Intercept(gx::InterceptorBatchMethods* methods) override {
     {
-      const HandoverScope handover(this);
+      const HandoverScope handover(handed_over_);
       if (methods->QueryInterceptionHookPoint(gx::InterceptionHookPoints::PRE_SEND_STATUS))
         finish(methods->GetSendStatus().error_code());
     }
@@ -116,6 +113,7 @@ class RpcMetricsInterceptor final : public gx::Interceptor {
   MethodMetrics& metrics_;
   std::chrono::steady_clock::time_point start_;
   std::atomic<bool> finished_{false};  // a stream's hooks may run on several threads
+  HandedOver handed_over_;             // last: gRPC calls and destroys it on its own threads
 };
 
 struct StringHash {

@@ -34,18 +34,12 @@ void require_pem(const std::string& path, std::string_view flag, std::string_vie
 // Sends `authorization: Bearer <token>` with every call on the channel.
 class BearerToken final : public grpc::MetadataCredentialsPlugin {
  public:
-  // gRPC calls and destroys the plugin on its own threads (common/handover.h).
-  explicit BearerToken(std::string token) : header_("Bearer " + std::move(token)) {
-    publish_handover(this);
-  }
-  ~BearerToken() override { receive_handover(this); }
-  BearerToken(const BearerToken&) = delete;
-  BearerToken& operator=(const BearerToken&) = delete;
+  explicit BearerToken(std::string token) : header_("Bearer " + std::move(token)) {}
   bool IsBlocking() const override { return false; }
   const char* GetType() const override { return "pnp-bearer"; }
   grpc::Status GetMetadata(grpc::string_ref, grpc::string_ref, const grpc::AuthContext&,
                            std::multimap<grpc::string, grpc::string>* metadata) override {
-    const HandoverScope handover(this);
+    const HandoverScope handover(handed_over_);
     metadata->emplace("authorization", header_);
     return grpc::Status::OK;
   }
@@ -53,6 +47,7 @@ class BearerToken final : public grpc::MetadataCredentialsPlugin {
 
  private:
   std::string header_;
+  HandedOver handed_over_;  // last: gRPC calls and destroys it on its own threads
 };
 
 // A certificate without its key, or a key without its certificate.
