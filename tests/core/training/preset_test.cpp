@@ -42,6 +42,7 @@ TEST(Preset, PaperIsThePublishedMethod) {
   EXPECT_FALSE(p.a3c.network.predicate_inputs);
   EXPECT_FALSE(p.a3c.network.mask_finished);
   EXPECT_EQ(p.expert_stop.eval_interval_steps, 5000) << "once per epoch";
+  EXPECT_EQ(p.ddpg.action_l2, 1.0) << "the original's action penalty";
   EXPECT_FALSE(effective_ddpg(preset_spec(p, "retract")).learn_gripper);
 }
 
@@ -63,6 +64,17 @@ TEST(Preset, OursWithDemonstrationsDiffersFromOursOnlyInItsDemonstrations) {
   }
   EXPECT_EQ(to_json(demos)["uses_demonstrations"], true);
   EXPECT_EQ(to_json(ours)["uses_demonstrations"], false);
+}
+
+// Ours penalises motion less than the original (docs/LEARNING.md, "Action penalty"); every
+// role of ours and ours+demos gets that penalty.
+TEST(Preset, OursPenalisesMotionLessThanTheOriginal) {
+  for (const char* name : {"ours", "ours+demos"}) {
+    const Preset& p = find_preset(name, "preset");
+    EXPECT_EQ(p.ddpg.action_l2, 0.2) << name;
+    for (const char* role : {"approach", "manipulate", "retract", "e2e"})
+      EXPECT_EQ(preset_spec(p, role).ddpg.action_l2, 0.2) << name << " " << role;
+  }
 }
 
 TEST(Preset, AnUnknownNameIsRefusedNamingTheFieldAndTheNames) {
