@@ -83,6 +83,7 @@ std::uint64_t play_segment(const GatewayCellSpec& spec, policy::v1::PolicyServic
       try {
         gateway::EpisodeOptions episode;
         episode.seed = next;
+        episode.trace = true;  // the events file is the cell's failure analysis
         reports.push_back(runner.run(episode, never));
         if (gateway::ends_run(reports.back().end)) {  // a fresh stand-in for the rest
           gateway_errors.push_back({{"seed", next}, {"error", reports.back().reason}});

@@ -401,6 +401,18 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
   }
   if (planned.rate_limited) ++report.rate_limited;
   if (planned.clamped) ++report.clamped;
+  if (episode.options.trace) {
+    log_("cycle", {{"step", report.steps},
+                   {"grip_sim_m", to_json(measured_sim.position_m)},
+                   {"object_sim_m", to_json(object_sim.position_m)},
+                   {"gripper_width_m", reading.gripper_width_m},
+                   {"subtask", prediction->subtask},
+                   {"action",
+                    {prediction->action(0), prediction->action(1), prediction->action(2),
+                     prediction->action(3)}},
+                   {"target_sim_m", to_json(planned.sim.position_m)},
+                   {"target_gripper_width_m", planned.base.gripper_width_m}});
+  }
   if (episode.options.dry_run) {
     log_("target", {{"step", report.steps},
                     {"position_base_m", to_json(planned.base.pose.position_m)},

@@ -38,6 +38,10 @@ struct EpisodeOptions {
   bool reset_scene = true;                   // false for a real arm: the scene is what it is
   std::optional<Eigen::Vector3d> goal_base;  // without a scene reset: where the object goes
   bool dry_run = false;                      // compute and log targets, send nothing
+  // Log a "cycle" event every cycle (simulation frame: grip point, object, opening, the
+  // subtask and action the policy chose, the planned target): what an operator or a
+  // failure analysis reads back. Off by default: 25 lines a second.
+  bool trace = false;
 };
 
 enum class EpisodeEnd {

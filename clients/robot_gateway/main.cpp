@@ -2,7 +2,7 @@
 // controller's state, asks the inference service for the next action, changes the target
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
-//   --episodes 5 --seed 1000 [--dry-run] [--json]
+//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json]
 //   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
 // clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once.
@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   std::string name = "pnp-robot-gateway";
   int episodes = 5;
   std::uint64_t seed = 1000;
-  bool dry_run = false, json = false, quiet = false;
+  bool dry_run = false, trace = false, json = false, quiet = false;
   app.add_option("--controller", controller_address, "robot controller host:port")
       ->envname("PNP_ROBOT_CONTROLLER_ADDRESS")
       ->capture_default_str();
@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--name", name, "client name on the lease")->capture_default_str();
   app.add_flag("--dry-run", dry_run, "compute and log targets without sending them");
+  app.add_flag("--trace", trace,
+               "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
   app.add_flag("--quiet", quiet, "no per-event log lines on stderr");
   services::ClientTlsFiles tls;  // the controller's and the inference service's
@@ -112,7 +114,8 @@ int main(int argc, char** argv) {
       reports.push_back(runner.run({.seed = seed + static_cast<std::uint64_t>(k),
                                     .reset_scene = true,
                                     .goal_base = std::nullopt,
-                                    .dry_run = dry_run},
+                                    .dry_run = dry_run,
+                                    .trace = trace},
                                    interrupted));
       if (gateway::ends_run(reports.back().end)) {
         std::fprintf(stderr, "pnp-robot-gateway: run ended: %s\n", reports.back().reason.c_str());

@@ -121,12 +121,15 @@ SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object, sim::World
                            const ArmControllerOptions& options)
     : options_(validated(options)), world_(load_world(robot, object, world)) {
   // A private copy of the training model: the weld that drags the gripper to its mocap
-  // target is switched off (the joints are torque-driven instead) and the step is the
-  // controller's 1 ms.
+  // target is switched off (the joints are torque-driven instead), the fingers are coupled
+  // as a Franka Hand's are (with independent fingers, two saturated finger servos squeezing
+  // an off-centre object push the compliant arm sideways instead of centring the object),
+  // and the step is the controller's 1 ms.
   model_.reset(mj_copyModel(nullptr, world_->mj()));
   if (!model_) throw_internal("mj_copyModel failed: out of memory");
   mjModel* m = model_.get();
   m->eq_active[require_id(m, mjOBJ_EQUALITY, "gripper_follows_target")] = 0;
+  m->eq_active[require_id(m, mjOBJ_EQUALITY, "fingers_coupled")] = 1;
   m->opt.timestep = kControlPeriod_s;
   // The reachability check's second opinion: the same arm without joint limits.
   unlimited_model_.reset(mj_copyModel(nullptr, m));

@@ -7,7 +7,8 @@
 // joint reference that follows the IK solution within the joint position, velocity and
 // acceleration limits -> computed torque (tau = M(q) (qdd_ref + Kp e + Kd de) + bias,
 // clamped to the Panda's torque limits) written to qfrc_applied -> mj_step. The fingers
-// are the model's position actuators. The mocap weld that drags the gripper in training
+// are the model's position actuators, coupled as a Franka Hand's are (the MJCF's
+// "fingers_coupled", off in training). The mocap weld that drags the gripper in training
 // is disabled: nothing here teleports the arm.
 //
 // The world is the training world (same MJCF, home pose, and object and goal for an

@@ -306,6 +306,32 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
 }
 
+// The trace is opt-in, one "cycle" event per cycle that sent a target, and it reads back
+// where the episode went: the last cycle's object is where the episode's end found it.
+TEST_F(GatewayEndToEnd, TraceLogsEveryCycleOnlyWhenAskedFor) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+  const EpisodeReport quiet = runner.run(episode(902), not_interrupted_);
+  EXPECT_EQ(count("cycle"), 0);
+  EpisodeOptions traced = episode(902);
+  traced.trace = true;
+  const EpisodeReport report = runner.run(traced, not_interrupted_);
+  EXPECT_EQ(report.steps, quiet.steps);  // lockstep and greedy: the same episode
+  ASSERT_EQ(report.refused, 0);          // a refused cycle logs "refused" instead
+  ASSERT_EQ(count("cycle"), report.steps);
+  int expected_step = 0;
+  for (const auto& [event, fields] : events_) {
+    if (event != "cycle") continue;
+    EXPECT_EQ(fields["step"].get<int>(), expected_step++);
+    EXPECT_EQ(fields["object_sim_m"].size(), 3u);
+    EXPECT_EQ(fields["grip_sim_m"].size(), 3u);
+    EXPECT_EQ(fields["action"].size(), 4u);
+    const int subtask = fields["subtask"].get<int>();
+    EXPECT_TRUE(subtask >= 1 && subtask <= 3) << subtask;  // approach, manipulate, retract
+  }
+}
+
 TEST_F(GatewayEndToEnd, InterruptEmergencyStopsTheArmAndEndsTheRun) {
   std::atomic<bool> interrupted{false};
   auto link = link_to(controller_server_->port(), interrupted);

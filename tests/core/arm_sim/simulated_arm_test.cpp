@@ -146,6 +146,41 @@ TEST(SimulatedArm, HoldsTheHomePoseWithoutTargets) {
   EXPECT_EQ(end.mode, ArmMode::kIdle);
 }
 
+// Moves the TCP to `world_position` (gripper down, opening `width_m`) and lets it settle.
+void move_and_settle(SimulatedArm& arm, const Eigen::Vector3d& world_position, double width_m) {
+  const Eigen::Quaterniond down = arm.state().commanded_base.orientation;
+  const TargetStatus status =
+      arm.set_target(arm.base_from_world().apply(world_position), down, width_m);
+  ASSERT_TRUE(status.accepted()) << status.message;
+  arm.advance(1.0);
+}
+
+// A Franka Hand's fingers are coupled, so a grasp centres the object between them. With
+// the training world's independent fingers, a grasp closed while the hand still descends
+// (as the learned manipulate expert does) leaves the object where the first pad pushed it:
+// here 7.7 mm off centre along the fingers (under 0.3 mm coupled); through the gateway such
+// grasps ended up to 16 mm off, outside the grasp predicate's 15 mm, and the manipulate
+// expert never finished (23 of 200 gateway episodes).
+TEST(SimulatedArm, FingersAreCoupledSoAGraspCentresTheObject) {
+  SimulatedArm arm = make_arm(ObjectShape::kBlock, sim::WorldProfile::kGym);
+  arm.reset(5);
+  const Eigen::Vector3d object = arm.state().object_world.position_m;
+  const Eigen::Vector3d off_centre(0.01, -0.01, 0);  // along the fingers: world y
+  move_and_settle(arm, object + off_centre + Eigen::Vector3d(0, 0, 0.02), 0.08);
+  const Eigen::Vector3d below_centre = object + off_centre + Eigen::Vector3d(0, 0, -0.005);
+  ASSERT_TRUE(arm.set_target(arm.base_from_world().apply(below_centre),
+                             arm.state().commanded_base.orientation, 0.0)
+                  .accepted());
+  arm.advance(1.0);
+  const ArmState after = arm.state();
+  const Eigen::Vector3d offset = after.tcp_world.position_m - after.object_world.position_m;
+  EXPECT_LT(std::abs(offset.y()), 0.003) << "grip point to object centre along the fingers";
+  EXPECT_NEAR(after.finger_gap_m, 2 * arm.world().object_spec().half_width_m, 0.004);
+  // Training keeps panda-gym's independent fingers: the coupling is the stand-in's alone.
+  const mjModel* training = arm.world().mj();
+  EXPECT_EQ(training->eq_active[mj_name2id(training, mjOBJ_EQUALITY, "fingers_coupled")], 0);
+}
+
 TEST(SimulatedArm, RefusesUnreachableAndMalformedTargetsWithoutChangingAnything) {
   SimulatedArm arm = make_arm();
   arm.reset(5);
