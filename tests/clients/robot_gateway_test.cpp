@@ -306,8 +306,8 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
 }
 
-// The trace is opt-in, one "cycle" event per cycle that sent a target, and it reads back
-// where the episode went: the last cycle's object is where the episode's end found it.
+// The trace is opt-in: one "cycle" event per cycle that planned a target, in step order,
+// with the grip point, the object, the action and the subtask the policy chose.
 TEST_F(GatewayEndToEnd, TraceLogsEveryCycleOnlyWhenAskedFor) {
   const robot::GatewayConfig config = panda_config();
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
