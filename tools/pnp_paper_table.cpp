@@ -33,7 +33,10 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 constexpr const char* kSingleValueOverrides[] = {"--prefix",
                                                  "--updates-per-transition",
                                                  "--expert-target",
+                                                 "--hlc-target",
                                                  "--hlc-gamma",
+                                                 "--hlc-entropy",
+                                                 "--hlc-exploring-starts",
                                                  "--predicate-inputs",
                                                  "--no-predicate-inputs",
                                                  "--mask-finished",
@@ -108,10 +111,21 @@ int main(int argc, char** argv) {
   app.add_option("--expert-target", expert_target,
                  "task success each subtask expert must reach (twice in a row)")
       ->capture_default_str();
+  double hlc_target = preset.hlc_stop.target_success;
+  app.add_option("--hlc-target", hlc_target,
+                 "task success the choreographer must reach (twice in a row)")
+      ->capture_default_str();
   bool fresh_eval_scenes = true;
   app.add_flag("--fresh-eval-scenes,!--fixed-eval-scenes", fresh_eval_scenes,
                "new evaluation scenes at every evaluation (default), or the same ones every time");
   app.add_option("--hlc-gamma", s.a3c.gamma, "the choreographer's discount per environment step")
+      ->capture_default_str();
+  app.add_option("--hlc-entropy", s.a3c.entropy_weight,
+                 "weight of the choreographer's entropy bonus")
+      ->capture_default_str();
+  app.add_option("--hlc-exploring-starts", s.a3c.exploring_starts,
+                 "fraction of the choreographer's training episodes whose first subtask is "
+                 "drawn uniformly")
       ->capture_default_str();
   app.add_flag("--predicate-inputs,!--no-predicate-inputs", s.a3c.network.predicate_inputs,
                "the choreographer sees the three subtask predicates [preset]");
@@ -134,6 +148,8 @@ int main(int argc, char** argv) {
       throw_invalid_argument("--prefix", "chained or scripted", "\"" + prefix + "\"");
     if (!(expert_target > 0 && expert_target <= 1))
       throw_invalid_argument("--expert-target", "a value in (0, 1]", std::to_string(expert_target));
+    if (!(hlc_target > 0 && hlc_target <= 1))
+      throw_invalid_argument("--hlc-target", "a value in (0, 1]", std::to_string(hlc_target));
     if (grid) {
       for (const char* option : kSingleValueOverrides) {
         if (app.count(option) > 0)
@@ -174,6 +190,7 @@ int main(int argc, char** argv) {
       s.world = sim::parse_world_profile(world, "--world");
       s.chained = prefix == "chained";
       s.expert_stop.target_success = expert_target;
+      s.hlc_stop.target_success = hlc_target;
       for (rl::StopRule* rule : {&s.expert_stop, &s.hlc_stop, &s.e2e_stop})
         rule->fresh_eval_scenes = fresh_eval_scenes;
       apply_caps(s, preset);

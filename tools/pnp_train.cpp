@@ -260,6 +260,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hlc-lr", o.spec.a3c.learning_rate)->capture_default_str();
   app.add_option("--entropy", o.spec.a3c.entropy_weight)->capture_default_str();
+  app.add_option("--exploring-starts", o.spec.a3c.exploring_starts,
+                 "hlc: fraction of training episodes whose first subtask is drawn uniformly")
+      ->capture_default_str();
   app.add_option("--hlc-gamma", o.spec.a3c.gamma, "hlc: discount per environment step")
       ->capture_default_str();
   app.add_flag("--predicate-inputs,!--no-predicate-inputs", o.spec.a3c.network.predicate_inputs,

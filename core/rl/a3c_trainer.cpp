@@ -44,38 +44,6 @@ void copy_network(ChoreographerNet& dst, ChoreographerNet& src) {
                            src.normalizer().count());
 }
 
-// Policy-gradient, entropy and value-loss gradients of one episode, accumulated in net.
-void episode_gradients(ChoreographerNet& net, HlcEpisode& episode, const A3cConfig& c) {
-  const std::size_t n = episode.decisions.size();
-  std::vector<double> rewards(n), values(n), discounts(n);
-  for (std::size_t t = 0; t < n; ++t) {
-    rewards[t] = episode.decisions[t].reward;
-    values[t] = episode.decisions[t].value;
-    discounts[t] = std::pow(c.gamma, episode.decisions[t].steps);
-  }
-  const Advantages adv = compute_gae(rewards, values, 0.0, discounts, c.gae_lambda);
-  std::vector<std::array<double, 3>> dlogits(n);
-  std::vector<double> dvalue(n);
-  for (std::size_t t = 0; t < n; ++t) {
-    const auto& p = episode.decisions[t].probabilities;
-    double entropy_grad_base = 0;  // sum_k p_k log p_k
-    for (double pk : p) entropy_grad_base += pk * std::log(std::max(pk, 1e-12));
-    for (int k = 0; k < sim::kNumSubtasks; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      const double onehot = k == episode.decisions[t].choice ? 1.0 : 0.0;
-      // d(-A log p_a)/dlogit_k = -A (1[k=a] - p_k)
-      const double policy = -adv.advantages[t] * (onehot - p[uk]);
-      // d(-beta H)/dlogit_k = beta p_k (log p_k - sum_j p_j log p_j)
-      const double entropy =
-          c.entropy_weight * p[uk] * (std::log(std::max(p[uk], 1e-12)) - entropy_grad_base);
-      dlogits[t][uk] = policy + entropy;
-    }
-    // d(0.5 w (V - R)^2)/dV
-    dvalue[t] = c.value_weight * (values[t] - adv.returns[t]);
-  }
-  net.backward(episode.caches, dlogits, dvalue);
-}
-
 // Serialises gradient application in ticket order.
 class TicketGate {
  public:
@@ -122,6 +90,10 @@ void A3cConfig::validate() const {
     throw_invalid_argument("gamma", "a value in (0, 1]", std::to_string(gamma));
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
     throw_invalid_argument("gae_lambda", "a value in [0, 1]", std::to_string(gae_lambda));
+  if (!(exploring_starts >= 0 && exploring_starts <= 1)) {
+    throw_invalid_argument("exploring_starts", "a fraction in [0, 1]",
+                           std::to_string(exploring_starts));
+  }
   if (!(entropy_weight >= 0))
     throw_invalid_argument("entropy_weight", "a non-negative number",
                            std::to_string(entropy_weight));
@@ -135,6 +107,42 @@ void A3cConfig::validate() const {
   }
   // The trunk feeds the LSTM's four gates.
   check_layer_widths("network.trunk", network.trunk, network.input_size(), 4 * network.lstm);
+}
+
+void episode_gradients(ChoreographerNet& net, HlcEpisode& episode, const A3cConfig& c) {
+  const std::size_t n = episode.decisions.size();
+  std::vector<double> rewards(n), values(n), discounts(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    rewards[t] = episode.decisions[t].reward;
+    values[t] = episode.decisions[t].value;
+    discounts[t] = std::pow(c.gamma, episode.decisions[t].steps);
+  }
+  const Advantages adv = compute_gae(rewards, values, 0.0, discounts, c.gae_lambda);
+  std::vector<std::array<double, 3>> dlogits(n);
+  std::vector<double> dvalue(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    if (episode.decisions[t].exploring) {  // not the policy's choice: no loss of its own
+      dlogits[t] = {};
+      dvalue[t] = 0;
+      continue;
+    }
+    const auto& p = episode.decisions[t].probabilities;
+    double entropy_grad_base = 0;  // sum_k p_k log p_k
+    for (double pk : p) entropy_grad_base += pk * std::log(std::max(pk, 1e-12));
+    for (int k = 0; k < sim::kNumSubtasks; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      const double onehot = k == episode.decisions[t].choice ? 1.0 : 0.0;
+      // d(-A log p_a)/dlogit_k = -A (1[k=a] - p_k)
+      const double policy = -adv.advantages[t] * (onehot - p[uk]);
+      // d(-beta H)/dlogit_k = beta p_k (log p_k - sum_j p_j log p_j)
+      const double entropy =
+          c.entropy_weight * p[uk] * (std::log(std::max(p[uk], 1e-12)) - entropy_grad_base);
+      dlogits[t][uk] = policy + entropy;
+    }
+    // d(0.5 w (V - R)^2)/dV
+    dvalue[t] = c.value_weight * (values[t] - adv.returns[t]);
+  }
+  net.backward(episode.caches, dlogits, dvalue);
 }
 
 std::string choice_string(const HlcEpisode& episode) {
@@ -245,8 +253,12 @@ HlcTrainingOutput train_choreographer(
         const long long ticket = k * workers + w;
         const auto episode_index = static_cast<std::uint64_t>(first_ticket + ticket);
         Rng choice_rng(derive_seed(choice_stream, episode_index));
-        HlcEpisode episode = run_hlc_episode(
-            *env, local, raw(own), derive_seed(episode_stream, episode_index), true, choice_rng);
+        // Drawn only when enabled, so runs without exploring starts keep their choices.
+        const bool exploring =
+            config.a3c.exploring_starts > 0 && choice_rng.uniform() < config.a3c.exploring_starts;
+        HlcEpisode episode =
+            run_hlc_episode(*env, local, raw(own), derive_seed(episode_stream, episode_index), true,
+                            choice_rng, exploring);
         local.zero_grads();
         episode_gradients(local, episode, config.a3c);
         gate.wait_for(ticket);

@@ -33,6 +33,12 @@ struct A3cConfig {
   double gamma = 0.97;
   double gae_lambda = 0.95;
   double entropy_weight = 0.01;
+  // Exploring starts: this fraction of training episodes opens with a subtask drawn
+  // uniformly from the available ones. That first decision is not the policy's, so it
+  // trains neither the policy nor the value; every later one does. Without it a
+  // choreographer that settles early on manipulate-retract never learns what to do after
+  // approach, and so never finds that approach first is the better plan.
+  double exploring_starts = 0.0;
   double value_weight = 0.5;
   double max_grad_norm = 40.0;
   void validate() const;
@@ -56,6 +62,10 @@ struct HlcTrainingOutput {
   TrainingResult result;
   std::unique_ptr<ChoreographerNet> net;
 };
+
+// Accumulates into net's gradients the policy-gradient (GAE advantages), entropy and
+// value-loss terms of one sampled episode; an exploring start's first decision adds none.
+void episode_gradients(ChoreographerNet& net, HlcEpisode& episode, const A3cConfig& c);
 
 // experts: prototypes, cloned for every worker and evaluation thread.
 HlcTrainingOutput train_choreographer(

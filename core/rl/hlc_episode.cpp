@@ -36,6 +36,15 @@ int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, 
   throw_internal("choose_subtask: no subtask has a positive probability");
 }
 
+int choose_uniformly(const std::array<bool, sim::kNumSubtasks>& available, Rng& rng) {
+  const auto count = std::count(available.begin(), available.end(), true);
+  if (count == 0) throw_internal("choose_uniformly: no subtask is available");
+  auto pick = std::min(static_cast<long>(rng.uniform() * static_cast<double>(count)), count - 1);
+  for (std::size_t k = 0; k < available.size(); ++k)
+    if (available[k] && pick-- == 0) return static_cast<int>(k);
+  throw_internal("choose_uniformly: unreachable");
+}
+
 std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& state,
                                                        bool mask_finished) {
   std::array<bool, sim::kNumSubtasks> out{};
@@ -55,7 +64,8 @@ std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& sta
 
 HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
-                           std::uint64_t episode_seed, bool sample, Rng& choice_rng) {
+                           std::uint64_t episode_seed, bool sample, Rng& choice_rng,
+                           bool explore_first) {
   HlcEpisode out;
   env.reset(episode_seed);
   out.goal = env.episode_goal();
@@ -69,9 +79,11 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
     std::array<double, sim::kNumSubtasks> logits{};
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);
-    d.probabilities =
-        masked_softmax(logits, available_subtasks(env.task_state(), net.spec().mask_finished));
-    d.choice = choose_subtask(d.probabilities, sample, choice_rng);
+    const auto available = available_subtasks(env.task_state(), net.spec().mask_finished);
+    d.probabilities = masked_softmax(logits, available);
+    d.exploring = explore_first && out.decisions.empty();
+    d.choice = d.exploring ? choose_uniformly(available, choice_rng)
+                           : choose_subtask(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);
     for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {

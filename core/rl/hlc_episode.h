@@ -23,7 +23,8 @@ struct HlcDecision {
   std::array<double, sim::kNumSubtasks> probabilities{};
   double value = 0;
   double reward = 0;
-  int steps = 0;  // environment steps the chosen expert ran
+  int steps = 0;           // environment steps the chosen expert ran
+  bool exploring = false;  // drawn uniformly (an exploring start), not from the policy
 };
 
 struct HlcEpisode {
@@ -57,9 +58,14 @@ std::array<double, sim::kNumSubtasks> masked_softmax(
 // subtask of probability 0.
 int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng);
 
+// A draw of one of the available subtasks, each as likely (an exploring start).
+int choose_uniformly(const std::array<bool, sim::kNumSubtasks>& available, Rng& rng);
+
 // sample: draw choices from the policy (training); otherwise take the most probable.
+// explore_first: the first choice is drawn by choose_uniformly instead (training only).
 HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
-                           std::uint64_t episode_seed, bool sample, Rng& choice_rng);
+                           std::uint64_t episode_seed, bool sample, Rng& choice_rng,
+                           bool explore_first = false);
 
 }  // namespace pnp::rl

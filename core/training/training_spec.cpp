@@ -105,6 +105,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"gamma", s.a3c.gamma},
             {"gae_lambda", s.a3c.gae_lambda},
             {"entropy_weight", s.a3c.entropy_weight},
+            {"exploring_starts", s.a3c.exploring_starts},
             {"value_weight", s.a3c.value_weight},
             {"max_grad_norm", s.a3c.max_grad_norm},
             {"trunk", s.a3c.network.trunk},
@@ -226,6 +227,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*a3c, "gamma", s.a3c.gamma, p);
     read(*a3c, "gae_lambda", s.a3c.gae_lambda, p);
     read(*a3c, "entropy_weight", s.a3c.entropy_weight, p);
+    read(*a3c, "exploring_starts", s.a3c.exploring_starts, p);
     read(*a3c, "value_weight", s.a3c.value_weight, p);
     read(*a3c, "max_grad_norm", s.a3c.max_grad_norm, p);
     read(*a3c, "trunk", s.a3c.network.trunk, p);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common/error.h"
 #include "rl/a3c_trainer.h"
 #include "rl/choreographer_checkpoint.h"
@@ -77,12 +79,47 @@ TEST(A3c, FreshEvaluationScenesChangeTheEvaluationNotTheTraining) {
   EXPECT_TRUE(evaluation_differs) << "both runs evaluated the same scenes";
 }
 
+// The first decision of an exploring start was not drawn from the policy: it must add
+// nothing to the policy's or the value's loss. Every later decision trains as usual.
+TEST(A3c, AnExploringStartsFirstDecisionAddsNoGradient) {
+  ChoreographerNet net({{16}, 4});
+  Rng init(3);
+  net.initialise(init);
+  sim::PickPlaceEnv env(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock));
+  sim::ScriptedPolicy scripted;
+  Rng choices(1);
+  HlcEpisode episode;
+  for (std::uint64_t seed = 17; episode.decisions.size() < 2 && seed < 40; ++seed)
+    episode =
+        run_hlc_episode(env, net, {&scripted, &scripted, &scripted}, seed, true, choices, true);
+  ASSERT_GE(episode.decisions.size(), 2u);
+  const A3cConfig config;
+  auto gradient_norm = [&](HlcEpisode& e) {
+    net.zero_grads();
+    episode_gradients(net, e, config);
+    double sum = 0;
+    for (auto block : net.gradient_blocks())
+      for (float g : block) sum += static_cast<double>(g) * static_cast<double>(g);
+    return std::sqrt(sum);
+  };
+  HlcEpisode first_only = episode;
+  first_only.decisions.resize(1);
+  first_only.caches.resize(1);
+  EXPECT_EQ(gradient_norm(first_only), 0.0);
+  first_only.decisions.front().exploring = false;
+  EXPECT_GT(gradient_norm(first_only), 0.0) << "the same decision drawn by the policy trains";
+  EXPECT_GT(gradient_norm(episode), 0.0) << "the later decisions still train";
+}
+
 TEST(A3c, RefusesInvalidConfiguration) {
   A3cConfig c;
   c.workers = 0;
   EXPECT_THROW(c.validate(), Error);
   c = {};
   c.gamma = 1.5;
+  EXPECT_THROW(c.validate(), Error);
+  c = {};
+  c.exploring_starts = 1.5;
   EXPECT_THROW(c.validate(), Error);
 }
 

@@ -7,6 +7,7 @@
 #include <span>
 #include <utility>
 
+#include "common/error.h"
 #include "rl/hlc_episode.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
@@ -190,6 +191,45 @@ TEST(HlcEpisode, KeepsTheGoalItWasPlayedForAfterAFaultReset) {
   EXPECT_EQ(episode.env_steps, 6);
   EXPECT_EQ(episode.goal, goal);
   EXPECT_NE(env.episode_goal(), goal) << "the environment moved on to a fresh episode";
+}
+
+// An exploring start draws each available subtask alike, whatever the policy prefers.
+TEST(HlcOptions, AnExploringStartDrawsEveryAvailableSubtaskAlike) {
+  Rng rng(9);
+  std::array<int, 3> all{}, two{};
+  for (int i = 0; i < 3000; ++i) {
+    ++all[static_cast<std::size_t>(choose_uniformly({true, true, true}, rng))];
+    ++two[static_cast<std::size_t>(choose_uniformly({false, true, true}, rng))];
+  }
+  for (int count : all) EXPECT_NEAR(count, 1000, 100);
+  EXPECT_EQ(two[0], 0) << "a masked-out subtask was drawn";
+  EXPECT_NEAR(two[1], 1500, 120);
+  EXPECT_THROW(choose_uniformly({false, false, false}, rng), Error);
+}
+
+// Only the first decision of an exploring start is drawn uniformly (and flagged so A3C
+// leaves it out of the losses); the policy makes every later one.
+TEST(HlcEpisode, AnExploringStartFlagsItsFirstDecisionOnly) {
+  ChoreographerNet net({{16}, 4});
+  Rng init(1);
+  net.initialise(init);
+  sim::PickPlaceEnv env(fetch_block());
+  sim::ScriptedPolicy scripted;
+  std::array<int, 3> first{};
+  Rng choices(4);
+  for (std::uint64_t e = 0; e < 30; ++e) {
+    const HlcEpisode episode = run_hlc_episode(env, net, {&scripted, &scripted, &scripted},
+                                               derive_seed(6, e), true, choices, true);
+    ASSERT_FALSE(episode.decisions.empty());
+    EXPECT_TRUE(episode.decisions.front().exploring);
+    for (std::size_t d = 1; d < episode.decisions.size(); ++d)
+      EXPECT_FALSE(episode.decisions[d].exploring);
+    ++first[static_cast<std::size_t>(episode.decisions.front().choice)];
+  }
+  for (int count : first) EXPECT_GT(count, 3) << "every subtask opens some exploring starts";
+  const HlcEpisode on_policy = run_hlc_episode(env, net, {&scripted, &scripted, &scripted},
+                                               derive_seed(6, 99), true, choices);
+  for (const HlcDecision& d : on_policy.decisions) EXPECT_FALSE(d.exploring);
 }
 
 TEST(HlcOptions, UnavailableSubtasksGetZeroProbabilityAndTheRestSumToOne) {

@@ -77,6 +77,17 @@ TEST(Preset, OursPenalisesMotionLessThanTheOriginal) {
   }
 }
 
+// Ours stops experts and choreographer above the hierarchy's 95% (a stop rule on 100
+// episodes accepts a policy a little below its target); the paper stops at 95%.
+TEST(Preset, OursStopsEveryRoleAt97Percent) {
+  for (const char* name : {"ours", "ours+demos"}) {
+    const Preset& p = find_preset(name, "preset");
+    for (const char* role : {"approach", "manipulate", "retract", "hlc"})
+      EXPECT_EQ(preset_spec(p, role).stop.target_success, 0.97) << name << " " << role;
+  }
+  EXPECT_EQ(preset_spec(find_preset("paper", "preset"), "hlc").stop.target_success, 0.95);
+}
+
 TEST(Preset, AnUnknownNameIsRefusedNamingTheFieldAndTheNames) {
   try {
     find_preset("fast", "--preset");
