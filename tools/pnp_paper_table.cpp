@@ -37,6 +37,7 @@ constexpr const char* kSingleValueOverrides[] = {"--prefix",
                                                  "--hlc-gamma",
                                                  "--hlc-entropy",
                                                  "--hlc-exploring-starts",
+                                                 "--chain-prior",
                                                  "--predicate-inputs",
                                                  "--no-predicate-inputs",
                                                  "--mask-finished",
@@ -122,6 +123,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hlc-entropy", s.a3c.entropy_weight,
                  "weight of the choreographer's entropy bonus")
+      ->capture_default_str();
+  app.add_option("--chain-prior", s.a3c.network.chain_prior,
+                 "logit bonus for the subtask after the furthest finished one, in the experts' "
+                 "order [preset]")
       ->capture_default_str();
   app.add_option("--hlc-exploring-starts", s.a3c.exploring_starts,
                  "fraction of the choreographer's training episodes whose first subtask is "

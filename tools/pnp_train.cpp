@@ -260,6 +260,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hlc-lr", o.spec.a3c.learning_rate)->capture_default_str();
   app.add_option("--entropy", o.spec.a3c.entropy_weight)->capture_default_str();
+  app.add_option("--chain-prior", o.spec.a3c.network.chain_prior,
+                 "hlc: logit bonus for the next unfinished subtask in the experts' order")
+      ->capture_default_str();
   app.add_option("--exploring-starts", o.spec.a3c.exploring_starts,
                  "hlc: fraction of training episodes whose first subtask is drawn uniformly")
       ->capture_default_str();

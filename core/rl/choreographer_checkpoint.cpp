@@ -27,6 +27,7 @@ std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, Chor
                             {"lstm", meta.network.lstm},
                             {"predicate_inputs", meta.network.predicate_inputs},
                             {"mask_finished", meta.network.mask_finished},
+                            {"chain_prior", meta.network.chain_prior},
                             {"train_env_steps", meta.train_env_steps},
                             {"eval_success", meta.eval_success},
                             {"seed", meta.seed},
@@ -53,6 +54,7 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     // Checkpoints written before these became options had both.
     out.network.predicate_inputs = m.value("predicate_inputs", true);
     out.network.mask_finished = m.value("mask_finished", true);
+    out.network.chain_prior = m.value("chain_prior", 0.0);  // none before it existed
     out.train_env_steps = m.at("train_env_steps");
     out.eval_success = m.at("eval_success");
     out.seed = m.at("seed");

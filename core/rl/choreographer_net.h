@@ -29,6 +29,11 @@ struct ChoreographerSpec {
   // choreographer has neither: it sees observation and goal only.
   bool predicate_inputs = true;
   bool mask_finished = true;
+  // An action prior: this is added to the logit of the subtask that follows, in the order
+  // the experts were trained (approach, manipulate, retract), the furthest one whose
+  // predicate holds: a fixed bias that the learned logits can outweigh. 0: none (the
+  // paper's).
+  double chain_prior = 0.0;
   int input_size() const;
   bool operator==(const ChoreographerSpec&) const = default;
 };

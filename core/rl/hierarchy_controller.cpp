@@ -62,7 +62,7 @@ HierarchyController::Decision HierarchyController::act(const sim::Observation& o
     net_.encode(observation, episode_goal, state, input_);
     std::array<double, sim::kNumSubtasks> logits{};
     net_.step(input_, cache_, logits, value_);
-    probabilities_ = masked_softmax(logits, available_subtasks(state, net_.spec().mask_finished));
+    probabilities_ = decision_probabilities(logits, state, net_.spec());
     const auto best = std::max_element(probabilities_.begin(), probabilities_.end());
     current_ = sim::kAllSubtasks[static_cast<std::size_t>(best - probabilities_.begin())];
     steps_in_subtask_ = 0;

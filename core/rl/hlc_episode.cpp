@@ -62,6 +62,26 @@ std::array<bool, sim::kNumSubtasks> available_subtasks(const sim::TaskState& sta
   return out;
 }
 
+std::array<double, sim::kNumSubtasks> decision_probabilities(
+    std::array<double, sim::kNumSubtasks> logits, const sim::TaskState& state,
+    const ChoreographerSpec& spec) {
+  const auto available = available_subtasks(state, spec.mask_finished);
+  if (spec.chain_prior != 0) {
+    // The subtask after the furthest one whose predicate holds: approach before anything,
+    // manipulate once reached, retract once grasped (when the grasp lifts the hand off
+    // approach's point, approach is unfinished again, yet manipulate's work stands).
+    std::size_t next = 0;
+    for (std::size_t k = sim::kNumSubtasks; k-- > 0;) {
+      if (sim::objective_done(sim::objective_of(sim::kAllSubtasks[k]), state)) {
+        next = k + 1;
+        break;
+      }
+    }
+    if (next < sim::kNumSubtasks) logits[next] += spec.chain_prior;
+  }
+  return masked_softmax(logits, available);
+}
+
 HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                            const std::array<sim::SubtaskPolicy*, sim::kNumSubtasks>& experts,
                            std::uint64_t episode_seed, bool sample, Rng& choice_rng,
@@ -79,11 +99,12 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
     std::array<double, sim::kNumSubtasks> logits{};
     out.caches.emplace_back();
     net.step(input, out.caches.back(), logits, d.value);
-    const auto available = available_subtasks(env.task_state(), net.spec().mask_finished);
-    d.probabilities = masked_softmax(logits, available);
+    d.probabilities = decision_probabilities(logits, env.task_state(), net.spec());
     d.exploring = explore_first && out.decisions.empty();
-    d.choice = d.exploring ? choose_uniformly(available, choice_rng)
-                           : choose_subtask(d.probabilities, sample, choice_rng);
+    d.choice = d.exploring
+                   ? choose_uniformly(
+                         available_subtasks(env.task_state(), net.spec().mask_finished), choice_rng)
+                   : choose_subtask(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);
     for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {

@@ -54,6 +54,13 @@ std::array<double, sim::kNumSubtasks> masked_softmax(
     const std::array<double, sim::kNumSubtasks>& logits,
     const std::array<bool, sim::kNumSubtasks>& available);
 
+// The choreographer's choice probabilities in this state: its logits plus the chain prior
+// (ChoreographerSpec::chain_prior), softmaxed over the available subtasks. Training,
+// evaluation and serving all decide through this.
+std::array<double, sim::kNumSubtasks> decision_probabilities(
+    std::array<double, sim::kNumSubtasks> logits, const sim::TaskState& state,
+    const ChoreographerSpec& spec);
+
 // A draw from `p` (masked_softmax's output) when sampling, else the most probable; never a
 // subtask of probability 0.
 int choose_subtask(const std::array<double, sim::kNumSubtasks>& p, bool sample, Rng& rng);

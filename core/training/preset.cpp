@@ -43,7 +43,8 @@ Preset ours() {
   p.summary =
       "every improvement of ours without demonstrations: learned gripper, chained experts, 0.5 "
       "updates per transition, an action penalty of 0.2, experts and choreographer stopped at "
-      "97%, predicate inputs and masking for the choreographer, evaluation every 1k steps";
+      "97%, predicate inputs, masking and a prior toward the experts' order for the "
+      "choreographer, evaluation every 1k steps";
   p.uses_demonstrations = false;
   p.chained_experts = true;
   p.scripted_gripper = false;
@@ -64,6 +65,11 @@ Preset ours() {
   // at 0.97 it keeps training, and choreographers that pass do so at 0.98-1.00, at the
   // same step as with 0.95 (docs/LEARNING.md, "The choreographer's stop rule").
   p.hlc_stop = {100'000, 0.97, 1000, 100, 2};
+  // An action prior toward the experts' own order. Without it a choreographer can settle
+  // in its first thousand steps on manipulate-retract (manipulate first pays twice as
+  // often while later choices are still random) and never leave it (docs/LEARNING.md,
+  // "The chain prior"); the learned logits can still outweigh it.
+  p.a3c.network.chain_prior = 2.0;
   // The end-to-end baseline's cap is the paper's hierarchy total, enough to settle the
   // ordering; it evaluates less often (each evaluation plays 100 whole episodes).
   p.e2e_stop = {316'000, 0.95, 10'000, 100, 2};

@@ -14,7 +14,8 @@
 //               chained experts, 0.5 updates per transition at the original's target
 //               rate per gradient step, experts and choreographer stopped at 97%, predicate inputs
 //               and masking for the choreographer (domain knowledge computed from observation and
-//               goal), evaluation every 1k steps.
+//               goal), a prior toward the experts' order (chain_prior 2), evaluation every 1k
+//               steps.
 //   ours+demos  ours plus 10 scripted demonstration episodes per expert (their steps
 //               counted), 300 cloning updates and a behaviour-cloning term of weight 5.
 

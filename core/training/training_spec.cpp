@@ -111,7 +111,8 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"trunk", s.a3c.network.trunk},
             {"lstm", s.a3c.network.lstm},
             {"predicate_inputs", s.a3c.network.predicate_inputs},
-            {"mask_finished", s.a3c.network.mask_finished}}}};
+            {"mask_finished", s.a3c.network.mask_finished},
+            {"chain_prior", s.a3c.network.chain_prior}}}};
 }
 
 namespace {
@@ -234,6 +235,7 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
     read(*a3c, "lstm", s.a3c.network.lstm, p);
     read(*a3c, "predicate_inputs", s.a3c.network.predicate_inputs, p);
     read(*a3c, "mask_finished", s.a3c.network.mask_finished, p);
+    read(*a3c, "chain_prior", s.a3c.network.chain_prior, p);
   }
   return s;
 }

@@ -50,6 +50,7 @@ void read_a3c(const train::v1::A3cConfig& in, rl::A3cConfig& out) {
   if (in.has_gamma()) out.gamma = in.gamma();
   if (in.has_entropy_weight()) out.entropy_weight = in.entropy_weight();
   if (in.has_exploring_starts()) out.exploring_starts = in.exploring_starts();
+  if (in.has_chain_prior()) out.network.chain_prior = in.chain_prior();
   if (in.has_predicate_inputs()) out.network.predicate_inputs = in.predicate_inputs();
   if (in.has_mask_finished()) out.network.mask_finished = in.mask_finished();
 }

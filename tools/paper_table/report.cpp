@@ -112,7 +112,7 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       "Settings: each subtask expert trained after {} (docs/LEARNING.md), to {:.0f}% task "
       "success; DDPG+HER {} x {}, batch {}, {}; {} gripper; demonstrations {} episodes; "
       "choreographer A3C with {} workers, learning rate {}, discount {} per environment step, "
-      "entropy {}, {}, {}.\n\n",
+      "entropy {}, {}, {}, {}.\n\n",
       c.settings.chained ? "the learned experts before it (chained)"
                          : "scripted experts before it (as in the paper)",
       100 * c.settings.expert_stop.target_success, c.settings.ddpg.hidden.size(),
@@ -129,7 +129,11 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       c.settings.a3c.network.predicate_inputs ? "the subtask predicates as inputs"
                                               : "observation and goal only as inputs",
       c.settings.a3c.network.mask_finished ? "finished subtasks masked out"
-                                           : "every subtask choosable at every decision");
+                                           : "every subtask choosable at every decision",
+      c.settings.a3c.network.chain_prior != 0
+          ? fmt::format("a prior of {} on the logit of the next subtask in the experts' order",
+                        c.settings.a3c.network.chain_prior)
+          : std::string("no prior over the choices"));
   md += fmt::format(
       "BC experts are trained DAgger-style, as in the original code: the learner acts (with the "
       "same exploration noise as DDPG+HER) and every state it visits is labelled with the "

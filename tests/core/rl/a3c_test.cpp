@@ -121,6 +121,9 @@ TEST(A3c, RefusesInvalidConfiguration) {
   c = {};
   c.exploring_starts = 1.5;
   EXPECT_THROW(c.validate(), Error);
+  c = {};
+  c.network.chain_prior = std::nan("");
+  EXPECT_THROW(c.validate(), Error);
 }
 
 TEST(A3c, RefusesWorkersAndNetworksBeyondTheServersBounds) {
@@ -166,7 +169,7 @@ TEST(ChoreographerCheckpoint, KeepsThePaperChoreographersInputsAndMask) {
 }
 
 TEST(ChoreographerCheckpoint, RoundTripGivesIdenticalDecisionsAndCorruptionIsRefused) {
-  ChoreographerNet net({{16, 16}, 4});
+  ChoreographerNet net({{16, 16}, 4, true, true, 1.5});
   Rng rng(3);
   net.initialise(rng);
   std::vector<double> raw(sim::kObservationSize + sim::kGoalSize, 0.25);

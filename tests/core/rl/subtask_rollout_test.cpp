@@ -232,6 +232,36 @@ TEST(HlcEpisode, AnExploringStartFlagsItsFirstDecisionOnly) {
   for (const HlcDecision& d : on_policy.decisions) EXPECT_FALSE(d.exploring);
 }
 
+// The chain prior adds its bonus to the subtask after the furthest one finished: approach
+// at the start, manipulate once reached; the learned logits can outweigh it.
+TEST(HlcOptions, TheChainPriorFavoursTheSubtaskAfterTheFurthestFinished) {
+  sim::PickPlaceEnv env(fetch_block());
+  env.reset(derive_seed(3, 0));
+  ChoreographerSpec spec;
+  spec.chain_prior = 2.0;
+  const std::array<double, 3> flat{};
+  const double favoured = std::exp(2.0) / (std::exp(2.0) + 2.0);
+  auto p = decision_probabilities(flat, env.task_state(), spec);
+  EXPECT_NEAR(p[0], favoured, 1e-12) << "approach first";
+  EXPECT_NEAR(p[1], p[2], 1e-12);
+  p = decision_probabilities({0.0, 3.0, 0.0}, env.task_state(), spec);
+  EXPECT_GT(p[1], p[0]) << "a learned logit outweighs the prior";
+  spec.chain_prior = 0;
+  EXPECT_NEAR(decision_probabilities(flat, env.task_state(), spec)[0], 1.0 / 3, 1e-12);
+
+  for (int t = 0; t < 50; ++t) {
+    const sim::TaskState s = env.task_state();
+    if (sim::objective_done(sim::Objective::kApproach, s)) break;
+    env.step(sim::scripted_action(sim::Subtask::kApproach, s),
+             sim::objective_goal(sim::Objective::kApproach, s), sim::Objective::kApproach);
+  }
+  ASSERT_TRUE(sim::objective_done(sim::Objective::kApproach, env.task_state()));
+  spec.chain_prior = 2.0;
+  p = decision_probabilities(flat, env.task_state(), spec);
+  EXPECT_EQ(p[0], 0.0) << "approach is finished and masked";
+  EXPECT_NEAR(p[1], std::exp(2.0) / (std::exp(2.0) + 1.0), 1e-12) << "manipulate next";
+}
+
 TEST(HlcOptions, UnavailableSubtasksGetZeroProbabilityAndTheRestSumToOne) {
   const auto p = masked_softmax({5.0, 1.0, 1.0}, {false, true, true});
   EXPECT_EQ(p[0], 0.0) << "the largest logit is masked out";

@@ -88,6 +88,13 @@ TEST(Preset, OursStopsEveryRoleAt97Percent) {
   EXPECT_EQ(preset_spec(find_preset("paper", "preset"), "hlc").stop.target_success, 0.95);
 }
 
+// Ours leans the choreographer toward the experts' order; the paper's has no prior.
+TEST(Preset, OnlyOursHasAChainPrior) {
+  EXPECT_EQ(preset_spec(find_preset("ours", "preset"), "hlc").a3c.network.chain_prior, 2.0);
+  EXPECT_EQ(preset_spec(find_preset("ours+demos", "preset"), "hlc").a3c.network.chain_prior, 2.0);
+  EXPECT_EQ(preset_spec(find_preset("paper", "preset"), "hlc").a3c.network.chain_prior, 0.0);
+}
+
 TEST(Preset, AnUnknownNameIsRefusedNamingTheFieldAndTheNames) {
   try {
     find_preset("fast", "--preset");

@@ -51,6 +51,7 @@ TEST(TrainingSpecJson, RoundTripsEveryField) {
   spec.ddpg.polyak_every_updates = 40;
   spec.a3c.network.predicate_inputs = false;
   spec.a3c.network.mask_finished = false;
+  spec.a3c.network.chain_prior = 1.5;
   const TrainingSpec back = spec_from_json(to_json(spec));
   EXPECT_EQ(to_json(back), to_json(spec));
   EXPECT_FALSE(back.stop.fresh_eval_scenes);
@@ -58,6 +59,7 @@ TEST(TrainingSpecJson, RoundTripsEveryField) {
   EXPECT_EQ(back.ddpg.polyak_every_updates, 40);
   EXPECT_FALSE(back.a3c.network.predicate_inputs);
   EXPECT_FALSE(back.a3c.network.mask_finished);
+  EXPECT_EQ(back.a3c.network.chain_prior, 1.5);
   EXPECT_EQ(back.robot, sim::Robot::kPanda);
   EXPECT_EQ(back.world, sim::WorldProfile::kGym);
   EXPECT_EQ(back.ddpg.hidden, (std::vector<int>{32, 32}));
