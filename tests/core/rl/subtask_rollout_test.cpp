@@ -260,6 +260,19 @@ TEST(HlcOptions, TheChainPriorFavoursTheSubtaskAfterTheFurthestFinished) {
   p = decision_probabilities(flat, env.task_state(), spec);
   EXPECT_EQ(p[0], 0.0) << "approach is finished and masked";
   EXPECT_NEAR(p[1], std::exp(2.0) / (std::exp(2.0) + 1.0), 1e-12) << "manipulate next";
+
+  for (int t = 0; t < 40; ++t) {
+    const sim::TaskState s = env.task_state();
+    if (sim::objective_done(sim::Objective::kManipulate, s)) break;
+    env.step(sim::scripted_action(sim::Subtask::kManipulate, s),
+             sim::objective_goal(sim::Objective::kManipulate, s), sim::Objective::kManipulate);
+  }
+  ASSERT_TRUE(sim::objective_done(sim::Objective::kManipulate, env.task_state()));
+  ASSERT_FALSE(sim::objective_done(sim::Objective::kApproach, env.task_state()))
+      << "the grasp lifted the hand off approach's point: the case the rule is for";
+  p = decision_probabilities(flat, env.task_state(), spec);
+  EXPECT_NEAR(p[2], std::exp(2.0) / (std::exp(2.0) + 1.0), 1e-12)
+      << "retract next, not the unfinished approach";
 }
 
 TEST(HlcOptions, UnavailableSubtasksGetZeroProbabilityAndTheRestSumToOne) {
