@@ -36,6 +36,16 @@ std::shared_ptr<const sim::WorldModel> fetch_block() {
   return sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock);
 }
 
+// Runs the scripted expert of `subtask` until its predicate holds or its step cap.
+void run_scripted_to_predicate(sim::PickPlaceEnv& env, sim::Subtask subtask) {
+  const sim::Objective objective = sim::objective_of(subtask);
+  for (int t = 0; t < sim::step_cap(subtask); ++t) {
+    const sim::TaskState s = env.task_state();
+    if (sim::objective_done(objective, s)) return;
+    env.step(sim::scripted_action(subtask, s), sim::objective_goal(objective, s), objective);
+  }
+}
+
 // A PickPlaceEnv whose object's velocity blows up before step `fault_at`, as a contact
 // instability would: the environment reports the fault and has already begun a fresh
 // episode, with another goal.
@@ -145,13 +155,7 @@ TEST(HlcOptions, ASubtaskWhosePredicateHoldsCannotBeChosen) {
   env.reset(derive_seed(2, 0));
   EXPECT_EQ(available_subtasks(env.task_state(), true), (std::array<bool, 3>{true, true, true}));
   // Run the scripted approach to its predicate: approach is then unavailable.
-  for (int t = 0; t < sim::step_cap(sim::Subtask::kApproach); ++t) {
-    const sim::TaskState s = env.task_state();
-    const auto r =
-        env.step(sim::scripted_action(sim::Subtask::kApproach, s),
-                 sim::objective_goal(sim::Objective::kApproach, s), sim::Objective::kApproach);
-    if (r.objective_done) break;
-  }
+  run_scripted_to_predicate(env, sim::Subtask::kApproach);
   EXPECT_EQ(available_subtasks(env.task_state(), true), (std::array<bool, 3>{false, true, true}));
   EXPECT_EQ(available_subtasks(env.task_state(), false), (std::array<bool, 3>{true, true, true}))
       << "the paper's choreographer may choose any subtask at any decision";
@@ -249,24 +253,14 @@ TEST(HlcOptions, TheChainPriorFavoursTheSubtaskAfterTheFurthestFinished) {
   spec.chain_prior = 0;
   EXPECT_NEAR(decision_probabilities(flat, env.task_state(), spec)[0], 1.0 / 3, 1e-12);
 
-  for (int t = 0; t < 50; ++t) {
-    const sim::TaskState s = env.task_state();
-    if (sim::objective_done(sim::Objective::kApproach, s)) break;
-    env.step(sim::scripted_action(sim::Subtask::kApproach, s),
-             sim::objective_goal(sim::Objective::kApproach, s), sim::Objective::kApproach);
-  }
+  run_scripted_to_predicate(env, sim::Subtask::kApproach);
   ASSERT_TRUE(sim::objective_done(sim::Objective::kApproach, env.task_state()));
   spec.chain_prior = 2.0;
   p = decision_probabilities(flat, env.task_state(), spec);
   EXPECT_EQ(p[0], 0.0) << "approach is finished and masked";
   EXPECT_NEAR(p[1], std::exp(2.0) / (std::exp(2.0) + 1.0), 1e-12) << "manipulate next";
 
-  for (int t = 0; t < 40; ++t) {
-    const sim::TaskState s = env.task_state();
-    if (sim::objective_done(sim::Objective::kManipulate, s)) break;
-    env.step(sim::scripted_action(sim::Subtask::kManipulate, s),
-             sim::objective_goal(sim::Objective::kManipulate, s), sim::Objective::kManipulate);
-  }
+  run_scripted_to_predicate(env, sim::Subtask::kManipulate);
   ASSERT_TRUE(sim::objective_done(sim::Objective::kManipulate, env.task_state()));
   ASSERT_FALSE(sim::objective_done(sim::Objective::kApproach, env.task_state()))
       << "the grasp lifted the hand off approach's point: the case the rule is for";
