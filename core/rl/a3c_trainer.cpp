@@ -90,10 +90,7 @@ void A3cConfig::validate() const {
     throw_invalid_argument("gamma", "a value in (0, 1]", std::to_string(gamma));
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
     throw_invalid_argument("gae_lambda", "a value in [0, 1]", std::to_string(gae_lambda));
-  if (!(std::abs(network.chain_prior) <= 20)) {
-    throw_invalid_argument("network.chain_prior", "a logit bonus from -20 to 20",
-                           std::to_string(network.chain_prior));
-  }
+  check_chain_prior("network.chain_prior", network.chain_prior);
   if (!(exploring_starts >= 0 && exploring_starts <= 1)) {
     throw_invalid_argument("exploring_starts", "a fraction in [0, 1]",
                            std::to_string(exploring_starts));

@@ -6,6 +6,7 @@
 #include "nn/checkpoint_io.h"
 #include "nn/flat_ops.h"
 #include "rl/checkpoint_sections.h"
+#include "rl/network_limits.h"
 
 namespace pnp::rl {
 namespace {
@@ -66,6 +67,7 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     throw_invalid_argument("checkpoint network", "a trunk and a positive LSTM width",
                            "an empty network");
   }
+  check_chain_prior("checkpoint chain_prior", meta.network.chain_prior);
   ChoreographerNet net(meta.network);
   auto blocks = net.parameter_blocks();
   for (std::size_t b = 0; b < blocks.size(); ++b)

@@ -1,5 +1,6 @@
 #include "rl/network_limits.h"
 
+#include <cmath>
 #include <string>
 
 #include "common/error.h"
@@ -29,6 +30,14 @@ void check_layer_widths(std::string_view field, std::span<const int> widths, int
     throw_invalid_argument(
         name, "a network of at most " + std::to_string(kMaxNetworkParameters) + " parameters",
         std::to_string(parameters) + " parameters");
+  }
+}
+
+void check_chain_prior(std::string_view field, double chain_prior) {
+  if (!(std::abs(chain_prior) <= kMaxChainPrior)) {
+    const std::string bound = std::to_string(static_cast<int>(kMaxChainPrior));
+    throw_invalid_argument(field, "a logit bonus from -" + bound + " to " + bound,
+                           std::to_string(chain_prior));
   }
 }
 

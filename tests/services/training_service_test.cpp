@@ -200,6 +200,30 @@ TEST_F(TrainingServiceTest, BadCreateRequestsAreRefusedNamingTheFieldAndStoreNot
   EXPECT_EQ(run_count(), 0u);
 }
 
+// The choreographer's A3C fields reach validation from the proto: bad ones are refused
+// by name and nothing is stored.
+TEST_F(TrainingServiceTest, BadChoreographerSettingsAreRefusedNamingTheField) {
+  start("hlc");
+  const std::vector<BadCreate> cases{
+      {"NaN chain prior", [](auto& r) { r.mutable_a3c()->set_chain_prior(std::nan("")); },
+       grpc::StatusCode::INVALID_ARGUMENT, "network.chain_prior: expected a logit bonus"},
+      {"exploring starts above 1", [](auto& r) { r.mutable_a3c()->set_exploring_starts(2.0); },
+       grpc::StatusCode::INVALID_ARGUMENT, "exploring_starts: expected a fraction in [0, 1]"},
+  };
+  for (const auto& c : cases) {
+    tv1::CreateTrainingRunRequest r = small_request();
+    r.set_role(common::v1::ROLE_HLC);
+    r.set_algorithm(tv1::ALGORITHM_A3C);
+    c.change(r);
+    tv1::CreateTrainingRunResponse out;
+    const grpc::Status status = create(r, out);
+    EXPECT_EQ(status.error_code(), c.code) << c.name << ": " << status.error_message();
+    EXPECT_NE(status.error_message().find(c.message), std::string::npos)
+        << c.name << ": " << status.error_message();
+  }
+  EXPECT_EQ(run_count(), 0u);
+}
+
 TEST_F(TrainingServiceTest, UnknownIdsAndBadPagingAreRefused) {
   start("approach");
   grpc::ClientContext c1;

@@ -212,6 +212,27 @@ TEST(ChoreographerCheckpoint, RoundTripGivesIdenticalDecisionsAndCorruptionIsRef
   EXPECT_THROW(load_choreographer(truncated), Error);
 }
 
+// A checkpoint is served as it says: a chain prior out of range (or NaN) would turn the
+// choreographer into a fixed plan, or every choice into NaN.
+TEST(ChoreographerCheckpoint, AChainPriorOutOfRangeIsRefusedNamingIt) {
+  // NaN is written as JSON null, which the loader refuses as incomplete metadata.
+  const std::vector<std::pair<double, std::string>> cases{
+      {25.0, "checkpoint chain_prior: expected a logit bonus from -20 to 20, got 25"},
+      {std::nan(""), "checkpoint: incomplete metadata"}};
+  for (const auto& [prior, message] : cases) {
+    ChoreographerNet net({{16}, 4, true, true, prior});
+    Rng rng(3);
+    net.initialise(rng);
+    const ChoreographerMeta meta{"fetch", "block", "gym", net.spec(), 1, 0.5, 1, "test"};
+    try {
+      load_choreographer(save_choreographer(meta, net));
+      ADD_FAILURE() << "a chain prior of " << prior << " was loaded";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(ChoreographerCheckpoint, AnExpertCheckpointIsRefusedByKind) {
   DdpgHerConfig config;
   config.hidden = {8};
