@@ -21,6 +21,13 @@ namespace {
 namespace tv1 = train::v1;
 using training::testing::ScratchDir;
 
+struct BadCreate {
+  const char* name;
+  std::function<void(tv1::CreateTrainingRunRequest&)> change;
+  grpc::StatusCode code;
+  const char* message;
+};
+
 class TrainingServiceTest : public ::testing::Test {
  protected:
   void start(const std::string& role) {
@@ -32,6 +39,8 @@ class TrainingServiceTest : public ::testing::Test {
     stub_ = tv1::TrainingService::NewStub(grpc::CreateChannel(
         "127.0.0.1:" + std::to_string(runtime_->port()), grpc::InsecureChannelCredentials()));
   }
+  void expect_refused(const std::vector<BadCreate>& cases,
+                      const tv1::CreateTrainingRunRequest& base);
   void TearDown() override {
     if (runtime_) runtime_->shutdown(std::chrono::milliseconds(500));
   }
@@ -148,12 +157,21 @@ TEST_F(TrainingServiceTest, APresetFillsTheUnsetFieldsAndTheRequestsOwnWin) {
   EXPECT_EQ(config.at("stop").at("target_success"), 1.0) << "set by the request";
 }
 
-struct BadCreate {
-  const char* name;
-  std::function<void(tv1::CreateTrainingRunRequest&)> change;
-  grpc::StatusCode code;
-  const char* message;
-};
+// Each case's change to `base` is refused with its code and a message naming the field,
+// and no run is stored.
+void TrainingServiceTest::expect_refused(const std::vector<BadCreate>& cases,
+                                         const tv1::CreateTrainingRunRequest& base) {
+  for (const auto& c : cases) {
+    tv1::CreateTrainingRunRequest r = base;
+    c.change(r);
+    tv1::CreateTrainingRunResponse out;
+    const grpc::Status status = create(r, out);
+    EXPECT_EQ(status.error_code(), c.code) << c.name << ": " << status.error_message();
+    EXPECT_NE(status.error_message().find(c.message), std::string::npos)
+        << c.name << ": " << status.error_message();
+  }
+  EXPECT_EQ(run_count(), 0u);
+}
 
 TEST_F(TrainingServiceTest, BadCreateRequestsAreRefusedNamingTheFieldAndStoreNothing) {
   start("approach");
@@ -188,16 +206,7 @@ TEST_F(TrainingServiceTest, BadCreateRequestsAreRefusedNamingTheFieldAndStoreNot
       {"unknown preset", [](auto& r) { r.set_preset("fast"); }, grpc::StatusCode::INVALID_ARGUMENT,
        "preset: expected one of [\"paper\",\"ours\",\"ours+demos\"], got \"fast\""},
   };
-  for (const auto& c : cases) {
-    tv1::CreateTrainingRunRequest r = small_request();
-    c.change(r);
-    tv1::CreateTrainingRunResponse out;
-    const grpc::Status status = create(r, out);
-    EXPECT_EQ(status.error_code(), c.code) << c.name << ": " << status.error_message();
-    EXPECT_NE(status.error_message().find(c.message), std::string::npos)
-        << c.name << ": " << status.error_message();
-  }
-  EXPECT_EQ(run_count(), 0u);
+  expect_refused(cases, small_request());
 }
 
 // The choreographer's A3C fields reach validation from the proto: bad ones are refused
@@ -210,18 +219,10 @@ TEST_F(TrainingServiceTest, BadChoreographerSettingsAreRefusedNamingTheField) {
       {"exploring starts above 1", [](auto& r) { r.mutable_a3c()->set_exploring_starts(2.0); },
        grpc::StatusCode::INVALID_ARGUMENT, "exploring_starts: expected a fraction in [0, 1]"},
   };
-  for (const auto& c : cases) {
-    tv1::CreateTrainingRunRequest r = small_request();
-    r.set_role(common::v1::ROLE_HLC);
-    r.set_algorithm(tv1::ALGORITHM_A3C);
-    c.change(r);
-    tv1::CreateTrainingRunResponse out;
-    const grpc::Status status = create(r, out);
-    EXPECT_EQ(status.error_code(), c.code) << c.name << ": " << status.error_message();
-    EXPECT_NE(status.error_message().find(c.message), std::string::npos)
-        << c.name << ": " << status.error_message();
-  }
-  EXPECT_EQ(run_count(), 0u);
+  tv1::CreateTrainingRunRequest hlc = small_request();
+  hlc.set_role(common::v1::ROLE_HLC);
+  hlc.set_algorithm(tv1::ALGORITHM_A3C);
+  expect_refused(cases, hlc);
 }
 
 TEST_F(TrainingServiceTest, UnknownIdsAndBadPagingAreRefused) {
