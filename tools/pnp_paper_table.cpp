@@ -30,22 +30,26 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 }
 
 // Options that change one value of a preset: the grid runs every preset as it is named.
-constexpr const char* kSingleValueOverrides[] = {"--prefix",
-                                                 "--updates-per-transition",
-                                                 "--expert-target",
-                                                 "--hlc-target",
-                                                 "--hlc-gamma",
-                                                 "--hlc-entropy",
-                                                 "--hlc-exploring-starts",
-                                                 "--chain-prior",
-                                                 "--predicate-inputs",
-                                                 "--no-predicate-inputs",
-                                                 "--mask-finished",
-                                                 "--no-mask-finished",
-                                                 "--fresh-eval-scenes",
-                                                 "--fixed-eval-scenes",
-                                                 "--world",
-                                                 "--preset"};
+// A flag and its negation count as one option; the error names both.
+struct Override {
+  const char* option;
+  const char* spelled;
+};
+constexpr Override kSingleValueOverrides[] = {
+    {"--prefix", "--prefix"},
+    {"--updates-per-transition", "--updates-per-transition"},
+    {"--expert-target", "--expert-target"},
+    {"--hlc-target", "--hlc-target"},
+    {"--hlc-gamma", "--hlc-gamma"},
+    {"--hlc-entropy", "--hlc-entropy"},
+    {"--hlc-exploring-starts", "--hlc-exploring-starts"},
+    {"--chain-prior", "--chain-prior"},
+    {"--learned-gripper", "--learned-gripper or --scripted-gripper"},
+    {"--predicate-inputs", "--predicate-inputs or --no-predicate-inputs"},
+    {"--mask-finished", "--mask-finished or --no-mask-finished"},
+    {"--fresh-eval-scenes", "--fresh-eval-scenes or --fixed-eval-scenes"},
+    {"--world", "--world"},
+    {"--preset", "--preset"}};
 
 }  // namespace
 
@@ -105,6 +109,8 @@ int main(int argc, char** argv) {
                  "DDPG+HER and BC gradient steps per stored transition (0: the original's 40 "
                  "per cycle)")
       ->capture_default_str();
+  app.add_flag("--learned-gripper,!--scripted-gripper", s.ddpg.learn_gripper,
+               "experts learn the gripper command, or keep it scripted as the paper [preset]");
   app.add_option("--gripper-commitment", s.ddpg.gripper_commitment,
                  "weight of the prior pushing a learned gripper command to an end [preset]")
       ->capture_default_str();
@@ -156,10 +162,10 @@ int main(int argc, char** argv) {
     if (!(hlc_target > 0 && hlc_target <= 1))
       throw_invalid_argument("--hlc-target", "a value in (0, 1]", std::to_string(hlc_target));
     if (grid) {
-      for (const char* option : kSingleValueOverrides) {
-        if (app.count(option) > 0)
+      for (const Override& o : kSingleValueOverrides) {
+        if (app.count(o.option) > 0)
           throw_invalid_argument("--grid", "no per-value overrides (each cell runs its preset)",
-                                 option);
+                                 o.spelled);
       }
     }
     if (quick) {
