@@ -13,6 +13,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "arm_sim/simulated_arm.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/percentile.h"
@@ -64,10 +65,13 @@ double get_state_p50_us(gateway::ControllerLink& controller, int calls) {
 template <typename More>
 std::vector<gateway::EpisodeReport> drive(const robot::GatewayConfig& config,
                                           policy::v1::PolicyService::Stub& policy,
-                                          arm_sim::ClockMode clock, std::uint64_t first_seed,
-                                          More more, double* state_hot_us = nullptr) {
+                                          arm_sim::ClockMode clock, double acceleration_scale,
+                                          std::uint64_t first_seed, More more,
+                                          double* state_hot_us = nullptr) {
   arm_sim::StandInOptions options;
   options.clock = clock;
+  options.arm.acceleration_limits_rad_per_s2 =
+      arm_sim::arm_accelerations(acceleration_scale, "--acceleration-scale");
   arm_sim::ControllerStandIn arm(options);
   services::RobotControllerServiceImpl controller_service(arm);
   services::SimulatedSceneServiceImpl scene_service(arm);
@@ -105,14 +109,19 @@ int main(int argc, char** argv) {
   std::string config_path = PNP_DEFAULT_GATEWAY_CONFIG;
   std::uint64_t seed = 5000;
   bool json = false;
+  double acceleration_scale = arm_sim::kDefaultAccelerationScale;
   app.add_option("--cycles", cycles, "at least this many gateway cycles")->capture_default_str();
   app.add_option("--checkpoints", checkpoints, "directory with {approach,...,hlc}.ckpt (panda)")
       ->capture_default_str();
   app.add_option("--config", config_path, "gateway config")->capture_default_str();
   app.add_option("--seed", seed, "first episode seed")->capture_default_str();
+  app.add_option("--acceleration-scale", acceleration_scale,
+                 "the simulated Panda's joint accelerations, x its datasheet's")
+      ->capture_default_str();
   app.add_flag("--json", json, "print one JSON object");
   return tools::run_tool(app, argc, argv, [&] {
     require_positive(cycles, "--cycles");
+    arm_sim::arm_accelerations(acceleration_scale, "--acceleration-scale");
     const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
     const auto dir = std::filesystem::temp_directory_path() /
                      ("pnp_bench_gateway_" + std::to_string(::getpid()));
@@ -133,7 +142,7 @@ int main(int argc, char** argv) {
     std::size_t done = 0;
     const auto start = Clock::now();
     const auto reports = drive(
-        config, *policy_stub, arm_sim::ClockMode::kRealTime, seed,
+        config, *policy_stub, arm_sim::ClockMode::kRealTime, acceleration_scale, seed,
         [&](const std::vector<gateway::EpisodeReport>& so_far) {
           done += so_far.back().cycle_us.size();
           return done < static_cast<std::size_t>(cycles);
@@ -142,10 +151,11 @@ int main(int argc, char** argv) {
     const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double floor_after = ping_p50_us(policy_server.port(), 500);
     // The same episodes in lockstep: the physics without the wall clock, the success peer.
-    const auto lockstep = drive(config, *policy_stub, arm_sim::ClockMode::kLockstep, seed,
-                                [&](const std::vector<gateway::EpisodeReport>& so_far) {
-                                  return so_far.size() < reports.size();
-                                });
+    const auto lockstep =
+        drive(config, *policy_stub, arm_sim::ClockMode::kLockstep, acceleration_scale, seed,
+              [&](const std::vector<gateway::EpisodeReport>& so_far) {
+                return so_far.size() < reports.size();
+              });
     policy_server.shutdown(std::chrono::milliseconds(500));
     std::filesystem::remove_all(dir);
 
@@ -157,6 +167,7 @@ int main(int argc, char** argv) {
     out["lockstep_success_rate"] = gateway::summarize(lockstep)["success_rate"];
     out["wall_s"] = wall_s;
     out["period_ms"] = config.policy_period_s * 1000;
+    out["acceleration_scale"] = acceleration_scale;
     std::cout << (json ? out.dump() : out.dump(2)) << "\n";
   });
 }

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "arm_sim/simulated_arm.h"
 #include "bench/shape_transfer/gateway_cell.h"
 #include "bench/shape_transfer/transfer_report.h"
 #include "bench/shape_transfer/transfer_training.h"
@@ -50,6 +51,7 @@ struct Options {
   // Chosen on development seed 100 (docs/RESULTS.md): it lets the fine-tuned retract of the
   // thin cylinder keep its grasp; the block hierarchy trains without it (the preset's 0).
   double fine_tune_gripper_commitment = 1.0;
+  double acceleration_scale = arm_sim::kDefaultAccelerationScale;
 };
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -82,6 +84,7 @@ void validate(const Options& o) {
   require_positive(o.episodes, "--episodes");
   require_positive(o.fine_tune_max_steps, "--fine-tune-max-steps");
   require_positive(o.e2e_max_steps, "--e2e-max-steps");
+  arm_sim::arm_accelerations(o.acceleration_scale, "--acceleration-scale");
   for (const auto& s : o.shapes) {
     if (sim::parse_object(s, "--shapes") == sim::ObjectShape::kBlock)
       throw_invalid_argument("--shapes", "shapes other than block (block is the trained one)", s);
@@ -98,6 +101,7 @@ void validate(const Options& o) {
 
 void run(Options o, training::Preset preset) {
   if (o.extra_adapt == std::vector<std::string>{"none"}) o.extra_adapt.clear();
+  if (o.shapes == std::vector<std::string>{"none"}) o.shapes.clear();
   validate(o);
   const fs::path out(o.out);
   const sim::WorldProfile world = sim::parse_world_profile(o.world, "--world");
@@ -145,9 +149,13 @@ void run(Options o, training::Preset preset) {
   shapes.insert(shapes.end(), o.shapes.begin(), o.shapes.end());
   auto play = [&](const std::string& shape, const std::string& key,
                   const bench::ServedCheckpoints& served) {
-    bench::GatewayCellSpec cell{
-        sim::parse_object(shape),           world, &config, o.episodes, o.gateway_seed,
-        out / "cells" / (shape + "-" + key)};
+    bench::GatewayCellSpec cell{sim::parse_object(shape),
+                                world,
+                                &config,
+                                o.episodes,
+                                o.gateway_seed,
+                                out / "cells" / (shape + "-" + key),
+                                o.acceleration_scale};
     cells[shape][key] = bench::play_gateway_cell(cell, served);
     std::fprintf(stderr, "gateway %-12s %-17s %d/%d\n", shape.c_str(), key.c_str(),
                  cells[shape][key]["successes"].get<int>(), o.episodes);
@@ -203,6 +211,8 @@ void run(Options o, training::Preset preset) {
          o.hidden.empty() ? nlohmann::json(preset.ddpg.hidden) : nlohmann::json(o.hidden)},
         {"e2e_max_steps", o.skip_e2e ? nlohmann::json(nullptr) : nlohmann::json(o.e2e_max_steps)},
         {"gateway_config", o.config},
+        {"gateway_settings", config.to_json()},
+        {"acceleration_scale", o.acceleration_scale},
         {"clock", "lockstep"}}},
       {"seeds", {{"training", o.seed}, {"gateway_first", o.gateway_seed}}},
       {"block_hierarchy",
@@ -234,7 +244,8 @@ int main(int argc, char** argv) {
   app.add_option("--gateway-seed", o.gateway_seed,
                  "first gateway episode's scene seed (held out: >= 880000)")
       ->capture_default_str();
-  app.add_option("--shapes", o.shapes, "new shapes (block is the trained one)")
+  app.add_option("--shapes", o.shapes,
+                 "new shapes (block is the trained one); none: the block alone")
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--extra-adapt", o.extra_adapt,
@@ -248,6 +259,9 @@ int main(int argc, char** argv) {
                  "end-to-end cap (316k: the paper's hierarchy total, as in Table I)")
       ->capture_default_str();
   app.add_flag("--skip-e2e", o.skip_e2e, "no end-to-end column");
+  app.add_option("--acceleration-scale", o.acceleration_scale,
+                 "the simulated Panda's joint accelerations, x its datasheet's")
+      ->capture_default_str();
   app.add_option("--hierarchy", o.hierarchy,
                  "block hierarchy checkpoints to use instead of training one (pnp-train --out)");
   app.add_option("--e2e-checkpoint", o.e2e_checkpoint,

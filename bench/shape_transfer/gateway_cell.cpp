@@ -60,6 +60,8 @@ std::uint64_t play_segment(const GatewayCellSpec& spec, policy::v1::PolicyServic
   options.object = spec.shape;
   options.world = spec.world;
   options.clock = arm_sim::ClockMode::kLockstep;
+  options.arm.acceleration_limits_rad_per_s2 =
+      arm_sim::arm_accelerations(spec.acceleration_scale, "--acceleration-scale");
   arm_sim::ControllerStandIn arm(options);
   services::RobotControllerServiceImpl controller_service(arm);
   services::SimulatedSceneServiceImpl scene_service(arm);

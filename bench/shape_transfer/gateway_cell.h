@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "arm_sim/simulated_arm.h"
 #include "bench/shape_transfer/transfer_training.h"
 #include "robot/gateway_config.h"
 #include "serving/served_policy.h"
@@ -31,6 +32,7 @@ struct GatewayCellSpec {
   int episodes = 200;
   std::uint64_t first_seed = 880000;  // episode k plays scene first_seed + k
   std::filesystem::path work_dir;     // the cell's store, checkpoints and gateway events
+  double acceleration_scale = arm_sim::kDefaultAccelerationScale;  // x the Panda's datasheet
 };
 
 // The gateway's summary (gateway/gateway_summary.h) plus gateway_errors (episodes ended by

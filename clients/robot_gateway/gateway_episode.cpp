@@ -130,6 +130,7 @@ struct GatewayEpisodeRunner::Episode {
   Eigen::Vector3d goal_sim = Eigen::Vector3d::Zero();
   Eigen::Quaterniond held_orientation_base = Eigen::Quaterniond::Identity();
   std::optional<robot::PoseTarget> last_accepted;  // what hold() may send again
+  int waited = 0;  // periods waited for the arm since the policy was last asked
   bool lockstep = false;
   Clock::time_point next_cycle;
   EpisodeReport report;
@@ -347,7 +348,7 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     episode.end(EpisodeEnd::kSuccess, "");
     return false;
   }
-  if (report.steps >= config_.max_episode_steps) {
+  if (report.decisions >= config_.max_episode_steps) {
     episode.end(EpisodeEnd::kStepCap, "");
     return false;
   }
@@ -363,6 +364,20 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     return false;
   }
 
+  if (waiting_for_arm(episode, reading)) {
+    if (episode.options.trace) {
+      const double distance =
+          (reading.measured_base.position_m - episode.last_accepted->pose.position_m).norm();
+      log_("arrival_wait", {{"step", report.steps}, {"distance_m", distance}});
+    }
+    ++report.arrival_waits;
+    ++episode.waited;
+    const bool go_on = hold(episode, state);
+    report.cycle_us.push_back(micros(Clock::now() - start));
+    return go_on;
+  }
+  episode.waited = 0;
+  ++report.decisions;
   const auto asked = Clock::now();
   std::optional<Prediction> prediction;
   if (episode.session.ask(observation, episode.goal_sim)) {
@@ -395,9 +410,9 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
                      {"action",
                       {prediction->action(0), prediction->action(1), prediction->action(2),
                        prediction->action(3)}}});
-    hold(episode, state);
+    const bool go_on = hold(episode, state);
     report.cycle_us.push_back(micros(Clock::now() - start));
-    return true;
+    return go_on;
   }
   if (planned.rate_limited) ++report.rate_limited;
   if (planned.clamped) ++report.clamped;
@@ -427,9 +442,22 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
   return go_on;
 }
 
-// After a refusal: the last accepted target again, if it still passes the checks from
-// where the arm is commanded now; otherwise nothing (the controller holds by itself).
-void GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback& state) {
+// Whether this cycle waits for the arm to reach the last accepted target instead of asking
+// the policy (GatewayConfig::max_arrival_wait_periods).
+bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
+                                           const robot::ControllerReading& reading) const {
+  if (config_.max_arrival_wait_periods == 0 || !episode.last_accepted || episode.options.dry_run)
+    return false;
+  if (episode.waited >= config_.max_arrival_wait_periods) return false;
+  const double distance =
+      (reading.measured_base.position_m - episode.last_accepted->pose.position_m).norm();
+  return distance > config_.arrival_tolerance_m;
+}
+
+// After a refusal, or while waiting for the arm: the last accepted target again, if it
+// still passes the checks from where the arm is commanded now; otherwise nothing (the
+// controller holds by itself). False when the episode must end.
+bool GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback& state) {
   const geometry::Pose commanded = services::from_proto(state.commanded());
   const bool can_resend = episode.last_accepted && !episode.options.dry_run &&
                           robot::check_target(config_.limits, *episode.last_accepted, commanded,
@@ -437,10 +465,10 @@ void GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback&
                               .ok();
   if (!can_resend) {
     ++episode.report.held_without_target;
-    return;
+    return true;
   }
   const robot::PoseTarget again = *episode.last_accepted;
-  send_and_take_feedback(episode, again);
+  return send_and_take_feedback(episode, again);
 }
 
 // False when the episode must end (no answer, a stop, a lost lease).

@@ -26,6 +26,7 @@
 
 #include "clients/robot_gateway/controller_link.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "robot/controller_reading.h"
 #include "robot/gateway_config.h"
 #include "robot/safety_limits.h"
 
@@ -61,9 +62,11 @@ struct EpisodeReport {
   std::uint64_t seed = 0;
   bool success = false;
   EpisodeEnd end = EpisodeEnd::kStepCap;
-  std::string reason;    // for every end but success and the step cap
-  std::string arm_left;  // "tracking", "protective_stop", "emergency_stop" or why not
-  int steps = 0;
+  std::string reason;           // for every end but success and the step cap
+  std::string arm_left;         // "tracking", "protective_stop", "emergency_stop" or why not
+  int steps = 0;                // cycles
+  int decisions = 0;            // cycles that asked the policy (max_episode_steps counts these)
+  int arrival_waits = 0;        // cycles that waited for the arm instead (the target sent again)
   int refused = 0;              // by the gateway's safety check (held instead)
   int held_without_target = 0;  // refusals with no checked target to hold: nothing sent
   int rate_limited = 0;         // shortened to the speed limit
@@ -97,7 +100,8 @@ class GatewayEpisodeRunner {
   void run_cycles(Episode& episode);
   bool start_episode(Episode& episode);
   bool cycle(Episode& episode);
-  void hold(Episode& episode, const robot::v1::ControllerFeedback& state);
+  bool waiting_for_arm(const Episode& episode, const robot::ControllerReading& reading) const;
+  bool hold(Episode& episode, const robot::v1::ControllerFeedback& state);
   bool send_and_take_feedback(Episode& episode, const robot::PoseTarget& target);
   void leave_arm_safe(Episode& episode);
 

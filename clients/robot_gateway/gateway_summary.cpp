@@ -11,7 +11,7 @@ namespace pnp::gateway {
 nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
   std::vector<double> cycles, state, inference, send;
   int successes = 0, missed = 0, refused = 0, controller_refused = 0, rate_limited = 0;
-  int clamped = 0, held_without_target = 0;
+  int clamped = 0, held_without_target = 0, decisions = 0, arrival_waits = 0;
   std::map<std::string, int> ends, arm_left, controller_refusals_by_reason;
   nlohmann::json seeds = nlohmann::json::array();
   for (const EpisodeReport& e : episodes) {
@@ -26,6 +26,8 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
     rate_limited += e.rate_limited;
     clamped += e.clamped;
     held_without_target += e.held_without_target;
+    decisions += e.decisions;
+    arrival_waits += e.arrival_waits;
     for (const auto& [reason, n] : e.controller_refusals_by_reason) {
       controller_refusals_by_reason[reason] += n;
     }
@@ -38,6 +40,8 @@ nlohmann::json summarize(const std::vector<EpisodeReport>& episodes) {
           {"successes", successes},
           {"success_rate", successes / n},
           {"cycles", cycles.size()},
+          {"decisions", decisions},
+          {"arrival_waits", arrival_waits},
           {"cycle_p50_us", percentile(cycles, 0.5)},
           {"cycle_p99_us", percentile(cycles, 0.99)},
           {"cycle_max_us", percentile(cycles, 1.0)},

@@ -111,6 +111,19 @@ TargetStatus refused(TargetCode code, std::string message) {
 
 }  // namespace
 
+JointVector arm_accelerations(double scale, std::string_view field) {
+  if (!(scale > 0 && scale <= kMaxAccelerationScale)) {
+    throw_invalid_argument(field,
+                           fmt::format("a multiple of the Panda's datasheet accelerations in "
+                                       "(0, {}]",
+                                       kMaxAccelerationScale),
+                           fmt::format("{}", scale));
+  }
+  JointVector out = kPandaDatasheetAccelerations_rad_per_s2;
+  for (double& a : out) a *= scale;
+  return out;
+}
+
 Pose SimulatedArm::Segment::at(double time_s) const {
   const double s = duration_s > 0 ? std::clamp((time_s - start_s) / duration_s, 0.0, 1.0) : 1.0;
   return {from_position + s * (to_position - from_position),

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geometry/pose.h"
@@ -38,6 +39,20 @@ namespace pnp::arm_sim {
 inline constexpr int kJoints = sim::kArmJoints;
 inline constexpr double kControlPeriod_s = 0.001;  // the controller's 1 kHz tick
 using JointVector = std::array<double, kJoints>;
+
+// The Panda's joint acceleration limits from Franka's datasheet, joints 1-7.
+inline constexpr JointVector kPandaDatasheetAccelerations_rad_per_s2{15, 7.5, 10, 12.5, 15, 20, 20};
+// The stand-in's accelerations as a multiple of the datasheet's: the datasheet's, so that
+// the simulated arm cannot do what a real Panda would refuse with a reflex error. A policy
+// trained on a mocap hand that reaches each target within 40 ms lags behind such an arm;
+// the gateway waits for it (GatewayConfig::max_arrival_wait_periods). Up to twice, for
+// comparison (docs/RELIABILITY.md); three times demanded 88 N m on joint 1 for a 5 cm
+// step, over its 87 N m.
+inline constexpr double kDefaultAccelerationScale = 1.0;
+inline constexpr double kMaxAccelerationScale = 2.0;
+// The datasheet's accelerations times `scale`. INVALID_ARGUMENT naming `field` unless
+// 0 < scale <= kMaxAccelerationScale.
+JointVector arm_accelerations(double scale, std::string_view field = "acceleration_scale");
 
 struct ArmControllerOptions {
   // Reference generator: each tick the joint reference tracks the IK solution's position
@@ -74,14 +89,10 @@ struct ArmControllerOptions {
   // measured velocity stays within them.
   JointVector velocity_limits_rad_per_s{2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61};
   double velocity_limit_fraction = 0.9;
-  // Accelerations: twice Franka's datasheet values (15, 7.5, 10, 12.5, 15, 20, 20). With
-  // the datasheet's the arm cannot follow a policy trained on a mocap that moves 5 cm in
-  // 40 ms: the checked-in Panda hierarchy's gateway success fell from 0.70 to 0.44
-  // (pnp-bench-gateway, lockstep); a policy must learn the real arm's dynamics before they
-  // can be the default. With three times them (as before) joint 1 demands 88 N m for a
-  // 5 cm step, over its 87 N m. Jerks: the datasheet's (libfranka's rate limiter). Each is
-  // scaled down as one vector, like the velocity.
-  JointVector acceleration_limits_rad_per_s2{30, 15, 20, 25, 30, 40, 40};
+  // Accelerations: Franka's datasheet values times a scale (arm_accelerations below).
+  // Jerks: the datasheet's (libfranka's rate limiter). Each is scaled down as one vector,
+  // like the velocity.
+  JointVector acceleration_limits_rad_per_s2 = arm_accelerations(kDefaultAccelerationScale);
   JointVector jerk_limits_rad_per_s3{7500, 3750, 5000, 6250, 7500, 10000, 10000};
   JointVector torque_limits_nm{87, 87, 87, 87, 12, 12, 12};
 };

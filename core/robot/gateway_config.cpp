@@ -7,6 +7,7 @@
 #include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <string_view>
 
 #include "common/error.h"
@@ -54,7 +55,8 @@ void require_positive_finite(double value, std::string_view field, std::string_v
 GatewayConfig GatewayConfig::from_json(const json& j) {
   require_object(j, "",
                  {"base_from_sim", "base_frame_id", "limits", "policy_period_s",
-                  "deadman_timeout_s", "lease_timeout_s", "max_episode_steps", "action_scale_m"});
+                  "deadman_timeout_s", "lease_timeout_s", "max_episode_steps", "action_scale_m",
+                  "arrival_tolerance_m", "max_arrival_wait_periods"});
   GatewayConfig c;
   const auto transform = j.find("base_from_sim");
   if (transform == j.end()) {
@@ -70,6 +72,8 @@ GatewayConfig GatewayConfig::from_json(const json& j) {
   read_number(j, "lease_timeout_s", "", c.lease_timeout_s);
   read_int(j, "max_episode_steps", "", c.max_episode_steps);
   read_number(j, "action_scale_m", "", c.action_scale_m);
+  read_number(j, "arrival_tolerance_m", "", c.arrival_tolerance_m);
+  read_int(j, "max_arrival_wait_periods", "", c.max_arrival_wait_periods);
   c.validate();
   return c;
 }
@@ -102,7 +106,9 @@ json GatewayConfig::to_json() const {
       {"deadman_timeout_s", deadman_timeout_s},
       {"lease_timeout_s", lease_timeout_s},
       {"max_episode_steps", max_episode_steps},
-      {"action_scale_m", action_scale_m}};
+      {"action_scale_m", action_scale_m},
+      {"arrival_tolerance_m", arrival_tolerance_m},
+      {"max_arrival_wait_periods", max_arrival_wait_periods}};
 }
 
 void GatewayConfig::validate() const {
@@ -131,6 +137,15 @@ void GatewayConfig::validate() const {
         fmt::format("at most limits.max_step_m ({} m), or a full action is refused",
                     limits.max_step_m),
         fmt::format("{}", action_scale_m));
+  }
+  if (!(arrival_tolerance_m > 0 && arrival_tolerance_m <= 0.1)) {
+    throw_invalid_argument("arrival_tolerance_m", "a distance in (0, 0.1] m",
+                           fmt::format("{}", arrival_tolerance_m));
+  }
+  if (max_arrival_wait_periods < 0 || max_arrival_wait_periods > kMaxArrivalWaitPeriods) {
+    throw_invalid_argument("max_arrival_wait_periods",
+                           fmt::format("an integer in [0, {}]", kMaxArrivalWaitPeriods),
+                           std::to_string(max_arrival_wait_periods));
   }
 }
 

@@ -11,7 +11,8 @@
 //               "gripper_min_width_m": 0, "gripper_max_width_m": 0.08,
 //               "quaternion_norm_tolerance": 0.001},
 //    "policy_period_s": 0.04, "deadman_timeout_s": 0.1, "lease_timeout_s": 0.5,
-//    "max_episode_steps": 50, "action_scale_m": 0.05}
+//    "max_episode_steps": 50, "action_scale_m": 0.05,
+//    "arrival_tolerance_m": 0.005, "max_arrival_wait_periods": 3}
 //
 // Every key but base_from_sim may be left out and takes the default below. base_from_sim
 // is required: a frame calibration silently defaulted would move a real arm to the wrong
@@ -27,6 +28,9 @@
 
 namespace pnp::robot {
 
+// A second of waiting at the trained 25 Hz: a longer wait is a stalled arm, not a slow one.
+inline constexpr int kMaxArrivalWaitPeriods = 25;
+
 struct GatewayConfig {
   // Maps simulation-world coordinates (policy observations and targets) into the robot's
   // base frame. Identity only as a placeholder: from_json requires it.
@@ -39,8 +43,16 @@ struct GatewayConfig {
   // The lease the gateway asks for: the controller's own dead-man, which holds the arm
   // when targets stop for this long (the protocol's default, 500 ms).
   double lease_timeout_s = 0.5;
-  int max_episode_steps = sim::layout::kEpisodeSteps;         // 50
+  int max_episode_steps = sim::layout::kEpisodeSteps;         // 50 decisions of the policy
   double action_scale_m = sim::layout::kActionPositionScale;  // per axis, per step
+  // Waiting for the arm. The policy was trained on a mocap hand that reaches each target
+  // within one period; a real arm lags (its joints accelerate within their limits). With
+  // max_arrival_wait_periods > 0, the policy is asked again only once the measured grip
+  // point is within arrival_tolerance_m of the last accepted target, or after that many
+  // periods of waiting, during which the target is sent again (hold). 0: ask every period.
+  // 5 mm and 3 periods were chosen on development scenes (docs/RELIABILITY.md).
+  double arrival_tolerance_m = 0.005;
+  int max_arrival_wait_periods = 3;
 
   // INVALID_ARGUMENT naming the key path (e.g. "limits.workspace.min_m[1]: expected a
   // number, got \"a\"") for a wrong type, an unknown or missing-but-required key, or a
@@ -55,7 +67,8 @@ struct GatewayConfig {
   // base_frame_id, non-positive periods or counts, a dead-man timeout not longer than the
   // policy period (it would trip every cycle), a lease timeout not longer than the
   // dead-man's (the lease would lapse first), or an action scale above limits.max_step_m
-  // (a full action along one axis would be refused).
+  // (a full action along one axis would be refused), or arrival settings outside
+  // (0, 0.1] m and [0, kMaxArrivalWaitPeriods].
   void validate() const;
 };
 

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "arm_sim/simulated_arm.h"
 #include "common/error.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   std::string clock = "realtime";
   std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   std::string metrics_address, limits;
+  double acceleration_scale = pnp::arm_sim::kDefaultAccelerationScale;
   app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
       ->capture_default_str();
   app.add_option("--object", object, "object on the table: block, cylinder or small_block")
@@ -41,6 +43,9 @@ int main(int argc, char** argv) {
   app.add_option("--limits", limits,
                  "the controller's own limits, JSON (deploy/robot/controller.json; empty: its "
                  "defaults, the same values)");
+  app.add_option("--acceleration-scale", acceleration_scale,
+                 "the simulated Panda's joint accelerations, x its datasheet's")
+      ->capture_default_str();
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   ServerSecurityFlags security_flags;
@@ -58,6 +63,8 @@ int main(int argc, char** argv) {
     options.world = pnp::sim::parse_world_profile(world, "--world");
     options.clock = clock == "lockstep" ? pnp::arm_sim::ClockMode::kLockstep
                                         : pnp::arm_sim::ClockMode::kRealTime;
+    options.arm.acceleration_limits_rad_per_s2 =
+        pnp::arm_sim::arm_accelerations(acceleration_scale, "--acceleration-scale");
     if (!limits.empty()) options.limits = pnp::arm_sim::ControllerLimits::load(limits);
     pnp::arm_sim::ControllerStandIn arm(options);
     StreamLimits stream_limits(stream_limit_options(limit_options, idle_timeout_s), "robot_sim");
@@ -78,6 +85,7 @@ int main(int argc, char** argv) {
                                    {"world", world},
                                    {"clock", clock},
                                    {"limits", options.limits.to_json()},
+                                   {"acceleration_scale", acceleration_scale},
                                    {"base_frame", arm.base_frame_id()}});
   } catch (const pnp::Error& e) {
     log_event("robot_sim", "fatal", {{"error", e.what()}});

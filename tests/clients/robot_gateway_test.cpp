@@ -291,8 +291,45 @@ TEST_F(GatewayEndToEnd, PicksAndPlacesThroughTheControllerStandIn) {
         << "seed " << r.seed << ": " << episode_end_name(r.end) << " " << r.reason;
     EXPECT_EQ(r.controller_refused, 0) << "seed " << r.seed;
     EXPECT_EQ(r.steps, static_cast<int>(r.cycle_us.size()));
-    EXPECT_LE(r.steps, config.max_episode_steps);
+    EXPECT_EQ(r.steps, r.decisions + r.arrival_waits);
+    EXPECT_LE(r.decisions, config.max_episode_steps);
+    EXPECT_LE(r.arrival_waits, config.max_arrival_wait_periods * r.decisions);
   }
+}
+
+// The arm lags the policy's mocap-trained expectation, so the gateway waits for it: after
+// a target, the policy is asked again only once the grip point is within the tolerance
+// of it, or after max_arrival_wait_periods periods of waiting; never before the first
+// target. Without waits (0) every cycle asks the policy.
+TEST_F(GatewayEndToEnd, WaitsForTheArmToReachATargetBeforeAskingAgain) {
+  robot::GatewayConfig config = panda_config();
+  ASSERT_GT(config.max_arrival_wait_periods, 0);
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  EpisodeOptions traced = episode(903);
+  traced.trace = true;
+  const EpisodeReport waited = GatewayEpisodeRunner(config, *controller_, *policy_stub_, recorder())
+                                   .run(traced, not_interrupted_);
+  EXPECT_GT(waited.arrival_waits, 0);
+  EXPECT_EQ(waited.steps, waited.decisions + waited.arrival_waits);
+  int in_a_row = 0;
+  bool asked = false;
+  for (const auto& [event, fields] : events_) {
+    if (event == "cycle") {
+      asked = true;
+      in_a_row = 0;
+    } else if (event == "arrival_wait") {
+      EXPECT_TRUE(asked) << "waited before the first target";
+      EXPECT_LE(++in_a_row, config.max_arrival_wait_periods);
+      EXPECT_GT(fields["distance_m"].get<double>(), config.arrival_tolerance_m);
+    }
+  }
+
+  config.max_arrival_wait_periods = 0;
+  const EpisodeReport every_period =
+      GatewayEpisodeRunner(config, *controller_, *policy_stub_, recorder())
+          .run(episode(903), not_interrupted_);
+  EXPECT_EQ(every_period.arrival_waits, 0);
+  EXPECT_EQ(every_period.steps, every_period.decisions);
 }
 
 TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
@@ -306,8 +343,9 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
 }
 
-// The trace is opt-in: one "cycle" event per cycle that planned a target, in step order,
-// with the grip point, the object, the action and the subtask the policy chose.
+// The trace is opt-in: one "cycle" event per cycle that planned a target and one
+// "arrival_wait" event per cycle that waited for the arm, in step order, with the grip
+// point, the object, the action and the subtask the policy chose.
 TEST_F(GatewayEndToEnd, TraceLogsEveryCycleOnlyWhenAskedFor) {
   const robot::GatewayConfig config = panda_config();
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
@@ -319,9 +357,13 @@ TEST_F(GatewayEndToEnd, TraceLogsEveryCycleOnlyWhenAskedFor) {
   const EpisodeReport report = runner.run(traced, not_interrupted_);
   EXPECT_EQ(report.steps, quiet.steps);  // lockstep and greedy: the same episode
   ASSERT_EQ(report.refused, 0);          // a refused cycle logs "refused" instead
-  ASSERT_EQ(count("cycle"), report.steps);
+  ASSERT_EQ(count("cycle"), report.decisions);
+  ASSERT_EQ(count("arrival_wait"), report.arrival_waits);
   int expected_step = 0;
   for (const auto& [event, fields] : events_) {
+    if (event == "arrival_wait") {
+      EXPECT_EQ(fields["step"].get<int>(), expected_step++);
+    }
     if (event != "cycle") continue;
     EXPECT_EQ(fields["step"].get<int>(), expected_step++);
     EXPECT_EQ(fields["object_sim_m"].size(), 3u);

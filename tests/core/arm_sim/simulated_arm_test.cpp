@@ -59,6 +59,28 @@ bool within_joint_limits(const SimulatedArm& arm, const ArmState& s) {
   return true;
 }
 
+// The stand-in moves no faster than a real Panda unless asked: its accelerations are the
+// datasheet's, and a scale beyond twice them (where joint 1 runs out of torque) is refused.
+TEST(SimulatedArm, AcceleratesAtTheDatasheetLimitsByDefault) {
+  EXPECT_EQ(kDefaults.acceleration_limits_rad_per_s2, kPandaDatasheetAccelerations_rad_per_s2);
+  const JointVector twice = arm_accelerations(2.0);
+  for (std::size_t j = 0; j < twice.size(); ++j)
+    EXPECT_EQ(twice[j], 2 * kPandaDatasheetAccelerations_rad_per_s2[j]);
+  for (const double bad : {0.0, -1.0, 2.5, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      arm_accelerations(bad, "--acceleration-scale");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_EQ(std::string(e.what()).rfind("--acceleration-scale: expected a multiple of the "
+                                            "Panda's datasheet accelerations in (0, 2], got ",
+                                            0),
+                0u)
+          << e.what();
+    }
+  }
+}
+
 // At the arm's acceleration and jerk limits a 5 cm step from rest settles within 0.3 s
 // (the policy's 25 Hz mocap world moves it in one 40 ms period), never past the target.
 TEST(SimulatedArm, ReachesAFiveCentimetreStepWithinLimitsAtEveryTick) {

@@ -43,6 +43,8 @@ TEST(GatewayConfig, MissingKeysTakeDefaults) {
   EXPECT_EQ(c.deadman_timeout_s, 0.1);
   EXPECT_EQ(c.max_episode_steps, 50);
   EXPECT_EQ(c.action_scale_m, 0.05);
+  EXPECT_EQ(c.arrival_tolerance_m, 0.005);
+  EXPECT_EQ(c.max_arrival_wait_periods, 3);
   EXPECT_EQ(c.limits.max_speed_m_per_s, 1.7);
   EXPECT_EQ(c.limits.workspace.min_m, SafetyLimits{}.workspace.min_m);
   // A partial limits object keeps the other limits' defaults.
@@ -63,11 +65,15 @@ TEST(GatewayConfig, JsonRoundTrip) {
   j["base_frame_id"] = "fr3_link0";
   j["max_episode_steps"] = 80;
   j["deadman_timeout_s"] = 0.25;
+  j["arrival_tolerance_m"] = 0.02;
+  j["max_arrival_wait_periods"] = 0;
   const GatewayConfig c = GatewayConfig::from_json(j);
   const nlohmann::json out = c.to_json();
   EXPECT_EQ(GatewayConfig::from_json(out).to_json(), out);
   EXPECT_EQ(out["base_frame_id"], "fr3_link0");
   EXPECT_EQ(out["max_episode_steps"], 80);
+  EXPECT_EQ(out["arrival_tolerance_m"], 0.02);
+  EXPECT_EQ(out["max_arrival_wait_periods"], 0);
   const geometry::RigidTransform back = GatewayConfig::from_json(out).base_from_sim;
   EXPECT_TRUE(back.rotation().isApprox(c.base_from_sim.rotation(), 1e-15));
   EXPECT_EQ(back.translation_m(), c.base_from_sim.translation_m());
@@ -86,7 +92,7 @@ TEST(GatewayConfig, UnknownKeysAreRefusedWithTheirPath) {
   EXPECT_EQ(refusal_for(j),
             "max_speed: unknown key (expected one of base_from_sim, base_frame_id, limits, "
             "policy_period_s, deadman_timeout_s, lease_timeout_s, max_episode_steps, "
-            "action_scale_m)");
+            "action_scale_m, arrival_tolerance_m, max_arrival_wait_periods)");
   j = minimal();
   j["limits"] = {{"max_step", 0.1}};
   EXPECT_EQ(refusal_for(j),
@@ -159,6 +165,16 @@ TEST(GatewayConfig, ValidatesAfterParsing) {
   j = minimal();
   j["base_frame_id"] = "";
   EXPECT_EQ(refusal_for(j), "base_frame_id: expected a frame name, got \"\"");
+  j = minimal();
+  j["arrival_tolerance_m"] = 0;
+  EXPECT_EQ(refusal_for(j), "arrival_tolerance_m: expected a distance in (0, 0.1] m, got 0");
+  j["arrival_tolerance_m"] = 0.5;
+  EXPECT_EQ(refusal_for(j), "arrival_tolerance_m: expected a distance in (0, 0.1] m, got 0.5");
+  j = minimal();
+  j["max_arrival_wait_periods"] = 26;
+  EXPECT_EQ(refusal_for(j), "max_arrival_wait_periods: expected an integer in [0, 25], got 26");
+  j["max_arrival_wait_periods"] = -1;
+  EXPECT_EQ(refusal_for(j), "max_arrival_wait_periods: expected an integer in [0, 25], got -1");
 }
 
 TEST(GatewayConfig, LoadReportsThePath) {
