@@ -165,16 +165,18 @@ TEST(GatewayConfig, ValidatesAfterParsing) {
   j = minimal();
   j["base_frame_id"] = "";
   EXPECT_EQ(refusal_for(j), "base_frame_id: expected a frame name, got \"\"");
-  j = minimal();
-  j["arrival_tolerance_m"] = 0;
-  EXPECT_EQ(refusal_for(j), "arrival_tolerance_m: expected a distance in (0, 0.1] m, got 0");
-  j["arrival_tolerance_m"] = 0.5;
-  EXPECT_EQ(refusal_for(j), "arrival_tolerance_m: expected a distance in (0, 0.1] m, got 0.5");
-  j = minimal();
-  j["max_arrival_wait_periods"] = 26;
-  EXPECT_EQ(refusal_for(j), "max_arrival_wait_periods: expected an integer in [0, 25], got 26");
-  j["max_arrival_wait_periods"] = -1;
-  EXPECT_EQ(refusal_for(j), "max_arrival_wait_periods: expected an integer in [0, 25], got -1");
+  // The arrival wait: a tolerance in (0, 0.1] m, at most a second of waiting.
+  const auto refusal_with = [](const char* key, const nlohmann::json& value) {
+    nlohmann::json k = minimal();
+    k[key] = value;
+    return refusal_for(k);
+  };
+  const std::string tolerance = "arrival_tolerance_m: expected a distance in (0, 0.1] m, got ";
+  EXPECT_EQ(refusal_with("arrival_tolerance_m", 0), tolerance + "0");
+  EXPECT_EQ(refusal_with("arrival_tolerance_m", 0.5), tolerance + "0.5");
+  const std::string waits = "max_arrival_wait_periods: expected an integer in [0, 25], got ";
+  EXPECT_EQ(refusal_with("max_arrival_wait_periods", 26), waits + "26");
+  EXPECT_EQ(refusal_with("max_arrival_wait_periods", -1), waits + "-1");
 }
 
 TEST(GatewayConfig, LoadReportsThePath) {
