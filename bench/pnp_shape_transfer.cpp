@@ -44,7 +44,7 @@ struct Options {
   int episodes = 200;
   std::vector<std::string> shapes{"cylinder", "small_block"}, extra_adapt{"hlc"};
   long long fine_tune_max_steps = 60'000, e2e_max_steps = 316'000;
-  std::string hierarchy, e2e_checkpoint, config = PNP_DEFAULT_GATEWAY_CONFIG;
+  std::string hierarchy, fine_tuned, e2e_checkpoint, config = PNP_DEFAULT_GATEWAY_CONFIG;
   std::string out = "runs/shape-transfer";
   std::size_t threads = 0;
   std::vector<int> hidden;
@@ -66,12 +66,12 @@ void save_hierarchy(const fs::path& dir, const bench::HierarchyBlobs& blobs) {
                               blobs.roles[k]);
 }
 
-bench::HierarchyBlobs load_hierarchy(const fs::path& dir) {
+bench::HierarchyBlobs load_hierarchy(const fs::path& dir, std::string_view option) {
   bench::HierarchyBlobs blobs;
   for (std::size_t k = 0; k < bench::kHierarchyRoles.size(); ++k) {
     const fs::path file = dir / (std::string(bench::kHierarchyRoles[k]) + ".ckpt");
     if (!fs::exists(file))
-      throw_invalid_argument("--hierarchy",
+      throw_invalid_argument(option,
                              "a directory with approach, manipulate, retract and "
                              "hlc .ckpt files (pnp-train --out)",
                              "no file " + file.string());
@@ -132,7 +132,7 @@ void run(Options o, training::Preset preset) {
   std::vector<bench::RoleTraining> block_log, e2e_log;
   const bench::HierarchyBlobs block = o.hierarchy.empty()
                                           ? bench::train_block_hierarchy(t, block_log)
-                                          : load_hierarchy(o.hierarchy);
+                                          : load_hierarchy(o.hierarchy, "--hierarchy");
   save_hierarchy(out / "checkpoints" / "block", block);
 
   std::vector<bench::TransferColumn> columns{{"fine_tuned", "(a) hierarchy, retract fine-tuned"}};
@@ -165,6 +165,17 @@ void run(Options o, training::Preset preset) {
   // end-to-end training; then every cell.
   std::map<std::string, bench::HierarchyBlobs> tuned, tuned_extra;
   for (const auto& shape : o.shapes) {
+    if (!o.fine_tuned.empty()) {  // an earlier run's: the cells are played again
+      const fs::path from(o.fine_tuned);
+      tuned[shape] = load_hierarchy(from / (shape + "-fine_tuned"), "--fine-tuned");
+      if (!o.extra_adapt.empty())
+        tuned_extra[shape] = load_hierarchy(from / (shape + "-fine_tuned_extra"), "--fine-tuned");
+      save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned"), tuned[shape]);
+      if (!o.extra_adapt.empty())
+        save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned_extra"), tuned_extra[shape]);
+      fine_tuning[shape] = o.fine_tuned;
+      continue;
+    }
     const sim::ObjectShape object = sim::parse_object(shape);
     std::vector<bench::RoleTraining> log;
     tuned[shape] = bench::fine_tune_for_shape(t, block, object, {"retract"}, log);
@@ -264,6 +275,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hierarchy", o.hierarchy,
                  "block hierarchy checkpoints to use instead of training one (pnp-train --out)");
+  app.add_option("--fine-tuned", o.fine_tuned,
+                 "an earlier run's checkpoints/ directory: its fine-tuned hierarchies "
+                 "(SHAPE-fine_tuned, SHAPE-fine_tuned_extra) are played instead of training "
+                 "new ones (with --hierarchy: the cells again under another controller)");
   app.add_option("--e2e-checkpoint", o.e2e_checkpoint,
                  "end-to-end checkpoint to use instead of training one");
   app.add_option("--hidden", o.hidden,

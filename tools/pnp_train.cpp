@@ -74,8 +74,8 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   app.add_option("--updates-per-transition", d.updates_per_transition,
                  "> 0: gradient steps per stored transition instead of --updates-per-cycle")
       ->capture_default_str();
-  app.add_flag("--scripted-gripper", o.spec.scripted_gripper,
-               "keep the gripper command scripted (paper-faithful)");
+  app.add_flag("--scripted-gripper,!--learned-gripper", o.spec.scripted_gripper,
+               "keep the gripper command scripted, as the paper's code, or learn it [preset]");
   app.add_option("--demo-episodes", d.demo_episodes,
                  "scripted demonstrations before exploring (counted)")
       ->capture_default_str();

@@ -19,6 +19,8 @@ std::string rate_cell(const nlohmann::json& cell) {
 // "retract 12.0k (reached), ..." for one shape's fine-tuning.
 std::string steps_cell(const nlohmann::json& roles) {
   if (roles.is_null() || roles.empty()) return "- (trained on block)";
+  if (roles.is_string())
+    return "from " + roles.get<std::string>();  // pnp-shape-transfer --fine-tuned
   std::string text;
   for (const auto& r : roles) {
     if (!text.empty()) text += ", ";

@@ -88,6 +88,19 @@ TEST(Preset, OursStopsEveryRoleAt97Percent) {
   EXPECT_EQ(preset_spec(find_preset("paper", "preset"), "hlc").stop.target_success, 0.95);
 }
 
+// Every preset drives the gripper as the paper's code does: measured, a learned gripper
+// costs ours steps and held-out success (docs/RESULTS.md, "The gripper scripted").
+TEST(Preset, EveryPresetScriptsTheGripper) {
+  for (const char* name : {"paper", "ours", "ours+demos"}) {
+    const Preset& p = find_preset(name, "preset");
+    EXPECT_TRUE(p.scripted_gripper) << name;
+    for (const char* role : {"approach", "manipulate", "retract"})
+      EXPECT_FALSE(effective_ddpg(preset_spec(p, role)).learn_gripper) << name << " " << role;
+    EXPECT_TRUE(effective_ddpg(preset_spec(p, "e2e")).learn_gripper)
+        << name << ": the end-to-end baseline has no scripted gripper to keep";
+  }
+}
+
 // Ours leans the choreographer toward the experts' order; the paper's has no prior.
 TEST(Preset, OnlyOursHasAChainPrior) {
   EXPECT_EQ(preset_spec(find_preset("ours", "preset"), "hlc").a3c.network.chain_prior, 2.0);
