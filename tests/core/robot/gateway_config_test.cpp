@@ -44,7 +44,7 @@ TEST(GatewayConfig, MissingKeysTakeDefaults) {
   EXPECT_EQ(c.max_episode_steps, 50);
   EXPECT_EQ(c.action_scale_m, 0.05);
   EXPECT_EQ(c.arrival_tolerance_m, 0.005);
-  EXPECT_EQ(c.max_arrival_wait_periods, 3);
+  EXPECT_EQ(c.max_arrival_wait_periods, 0);
   EXPECT_EQ(c.limits.max_speed_m_per_s, 1.7);
   EXPECT_EQ(c.limits.workspace.min_m, SafetyLimits{}.workspace.min_m);
   // A partial limits object keeps the other limits' defaults.
@@ -66,14 +66,14 @@ TEST(GatewayConfig, JsonRoundTrip) {
   j["max_episode_steps"] = 80;
   j["deadman_timeout_s"] = 0.25;
   j["arrival_tolerance_m"] = 0.02;
-  j["max_arrival_wait_periods"] = 0;
+  j["max_arrival_wait_periods"] = 4;
   const GatewayConfig c = GatewayConfig::from_json(j);
   const nlohmann::json out = c.to_json();
   EXPECT_EQ(GatewayConfig::from_json(out).to_json(), out);
   EXPECT_EQ(out["base_frame_id"], "fr3_link0");
   EXPECT_EQ(out["max_episode_steps"], 80);
   EXPECT_EQ(out["arrival_tolerance_m"], 0.02);
-  EXPECT_EQ(out["max_arrival_wait_periods"], 0);
+  EXPECT_EQ(out["max_arrival_wait_periods"], 4);
   const geometry::RigidTransform back = GatewayConfig::from_json(out).base_from_sim;
   EXPECT_TRUE(back.rotation().isApprox(c.base_from_sim.rotation(), 1e-15));
   EXPECT_EQ(back.translation_m(), c.base_from_sim.translation_m());
