@@ -366,9 +366,8 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
 
   if (waiting_for_arm(episode, reading)) {
     if (episode.options.trace) {
-      const double distance =
-          (reading.measured_base.position_m - episode.last_accepted->pose.position_m).norm();
-      log_("arrival_wait", {{"step", report.steps}, {"distance_m", distance}});
+      log_("arrival_wait",
+           {{"step", report.steps}, {"distance_m", distance_to_last_target(episode, reading)}});
     }
     ++report.arrival_waits;
     ++episode.waited;
@@ -442,6 +441,12 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
   return go_on;
 }
 
+// How far the measured grip point is from the last accepted target (which must exist).
+double GatewayEpisodeRunner::distance_to_last_target(const Episode& episode,
+                                                     const robot::ControllerReading& reading) {
+  return (reading.measured_base.position_m - episode.last_accepted->pose.position_m).norm();
+}
+
 // Whether this cycle waits for the arm to reach the last accepted target instead of asking
 // the policy (GatewayConfig::max_arrival_wait_periods).
 bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
@@ -449,9 +454,7 @@ bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
   if (config_.max_arrival_wait_periods == 0 || !episode.last_accepted || episode.options.dry_run)
     return false;
   if (episode.waited >= config_.max_arrival_wait_periods) return false;
-  const double distance =
-      (reading.measured_base.position_m - episode.last_accepted->pose.position_m).norm();
-  return distance > config_.arrival_tolerance_m;
+  return distance_to_last_target(episode, reading) > config_.arrival_tolerance_m;
 }
 
 // After a refusal, or while waiting for the arm: the last accepted target again, if it

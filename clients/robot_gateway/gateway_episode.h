@@ -101,6 +101,8 @@ class GatewayEpisodeRunner {
   bool start_episode(Episode& episode);
   bool cycle(Episode& episode);
   bool waiting_for_arm(const Episode& episode, const robot::ControllerReading& reading) const;
+  static double distance_to_last_target(const Episode& episode,
+                                        const robot::ControllerReading& reading);
   bool hold(Episode& episode, const robot::v1::ControllerFeedback& state);
   bool send_and_take_feedback(Episode& episode, const robot::PoseTarget& target);
   void leave_arm_safe(Episode& episode);
