@@ -129,6 +129,15 @@ void run(Options o, training::Preset preset) {
   // Given checkpoints are read first, so a bad path fails before any training.
   training::Blob e2e;
   if (!o.skip_e2e && !o.e2e_checkpoint.empty()) e2e = nn::read_file(o.e2e_checkpoint);
+  std::map<std::string, bench::HierarchyBlobs> tuned, tuned_extra;
+  nlohmann::json cells, fine_tuning;
+  for (const auto& shape : o.fine_tuned.empty() ? std::vector<std::string>{} : o.shapes) {
+    const fs::path from(o.fine_tuned);  // an earlier run's: its cells are played again
+    tuned[shape] = load_hierarchy(from / (shape + "-fine_tuned"), "--fine-tuned");
+    if (!o.extra_adapt.empty())
+      tuned_extra[shape] = load_hierarchy(from / (shape + "-fine_tuned_extra"), "--fine-tuned");
+    fine_tuning[shape] = o.fine_tuned;
+  }
   std::vector<bench::RoleTraining> block_log, e2e_log;
   const bench::HierarchyBlobs block = o.hierarchy.empty()
                                           ? bench::train_block_hierarchy(t, block_log)
@@ -144,7 +153,6 @@ void run(Options o, training::Preset preset) {
   columns.push_back({"block_hierarchy", "(b) block hierarchy, not fine-tuned"});
   if (!o.skip_e2e) columns.push_back({"e2e", "(c) end-to-end, trained on block"});
 
-  nlohmann::json cells, fine_tuning;
   std::vector<std::string> shapes{"block"};
   shapes.insert(shapes.end(), o.shapes.begin(), o.shapes.end());
   auto play = [&](const std::string& shape, const std::string& key,
@@ -163,17 +171,11 @@ void run(Options o, training::Preset preset) {
   // Training first (the fine-tunings, then the long end-to-end run), so that a run that
   // fails in training (say, --hidden not matching --hierarchy) fails before the hour of
   // end-to-end training; then every cell.
-  std::map<std::string, bench::HierarchyBlobs> tuned, tuned_extra;
   for (const auto& shape : o.shapes) {
-    if (!o.fine_tuned.empty()) {  // an earlier run's: the cells are played again
-      const fs::path from(o.fine_tuned);
-      tuned[shape] = load_hierarchy(from / (shape + "-fine_tuned"), "--fine-tuned");
-      if (!o.extra_adapt.empty())
-        tuned_extra[shape] = load_hierarchy(from / (shape + "-fine_tuned_extra"), "--fine-tuned");
+    if (tuned.contains(shape)) {  // given by --fine-tuned
       save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned"), tuned[shape]);
       if (!o.extra_adapt.empty())
         save_hierarchy(out / "checkpoints" / (shape + "-fine_tuned_extra"), tuned_extra[shape]);
-      fine_tuning[shape] = o.fine_tuned;
       continue;
     }
     const sim::ObjectShape object = sim::parse_object(shape);

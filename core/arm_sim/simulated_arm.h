@@ -44,8 +44,8 @@ using JointVector = std::array<double, kJoints>;
 inline constexpr JointVector kPandaDatasheetAccelerations_rad_per_s2{15, 7.5, 10, 12.5, 15, 20, 20};
 // The stand-in's accelerations as a multiple of the datasheet's: the datasheet's, so that
 // the simulated arm cannot do what a real Panda would refuse with a reflex error. A policy
-// trained on a mocap hand that reaches each target within 40 ms lags behind such an arm;
-// the gateway waits for it (GatewayConfig::max_arrival_wait_periods). Up to twice, for
+// trained on a mocap hand that reaches each target within 40 ms lags behind such an arm
+// (the gateway can wait for it: GatewayConfig::max_arrival_wait_periods). Up to twice, for
 // comparison (docs/RELIABILITY.md); three times demanded 88 N m on joint 1 for a 5 cm
 // step, over its 87 N m.
 inline constexpr double kDefaultAccelerationScale = 1.0;

@@ -50,7 +50,7 @@ Preset ours() {
   // The gripper command as the paper's code drives it (open until the grasp, then closed):
   // on development seeds 100-102 a learned one needed 25.7k +- 9.3k steps on Fetch and
   // 22.7k +- 2.5k on the Panda (held out 0.966-0.991), the scripted one 15.8k +- 2.1k and
-  // 14.4k +- 3.5k (0.985-0.999) (docs/RESULTS.md, "The gripper scripted").
+  // 14.4k +- 3.5k (0.985-0.999) (docs/RESULTS.md, "Preset `ours` scripts the gripper").
   p.scripted_gripper = true;
   p.ddpg = without_demonstrations({});
   p.ddpg.updates_per_transition = 0.5;

@@ -89,7 +89,7 @@ TEST(Preset, OursStopsEveryRoleAt97Percent) {
 }
 
 // Every preset drives the gripper as the paper's code does: measured, a learned gripper
-// costs ours steps and held-out success (docs/RESULTS.md, "The gripper scripted").
+// costs ours steps and held-out success (docs/RESULTS.md, "Preset `ours` scripts the gripper").
 TEST(Preset, EveryPresetScriptsTheGripper) {
   for (const char* name : {"paper", "ours", "ours+demos"}) {
     const Preset& p = find_preset(name, "preset");
