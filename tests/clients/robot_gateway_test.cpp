@@ -334,6 +334,32 @@ TEST_F(GatewayEndToEnd, WaitsForTheArmToReachATargetBeforeAskingAgain) {
   EXPECT_EQ(every_period.steps, every_period.decisions);
 }
 
+// A hold that cannot be delivered ends the episode on that cycle: here the arm is
+// emergency-stopped just before a wait cycle sends its target again, and the controller's
+// refusal of that re-send is the episode's end (no further cycle reads the state).
+TEST_F(GatewayEndToEnd, AHoldTheControllerRefusesEndsTheEpisodeThere) {
+  robot::GatewayConfig config = panda_config();
+  config.max_arrival_wait_periods = 3;
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  int wait_step = -1;
+  EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
+    events_.push_back({std::string(event), fields});
+    if (event == "arrival_wait" && wait_step < 0) {
+      wait_step = fields["step"].get<int>();
+      arm_->stop("a person walked into the cell", arm_sim::StopKind::kEmergency);
+    }
+  };
+  EpisodeOptions traced = episode(903);
+  traced.trace = true;
+  const EpisodeReport report =
+      GatewayEpisodeRunner(config, *controller_, *policy_stub_, log).run(traced, not_interrupted_);
+  ASSERT_GE(wait_step, 0) << "no cycle waited for the arm";
+  EXPECT_EQ(report.end, EpisodeEnd::kStopped);
+  EXPECT_EQ(report.reason, "the controller refused a target: the arm is stopped");
+  EXPECT_EQ(report.steps, wait_step);  // the failed cycle is the last
+  EXPECT_EQ(report.arrival_waits, 1);
+}
+
 TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   const robot::GatewayConfig config = panda_config();
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
