@@ -178,13 +178,15 @@ class Platform {
   std::string failed_;
 };
 
-// The sandbox a block runs in: build/bin and the checked-in files the commands read
-// (deploy/, docs/, tests/data) are links; whatever a command writes stays here.
+// The sandbox a block runs in: build/bin, build/python and the checked-in files the
+// commands read (deploy/, docs/, examples/) are links; whatever a command writes stays here.
 void make_sandbox(const fs::path& dir) {
   fs::create_directories(dir / "build");
   fs::create_directory_symlink(PNP_BIN_DIR, dir / "build" / "bin");
-  fs::create_directory_symlink(source_dir() / "deploy", dir / "deploy");
-  fs::create_directory_symlink(source_dir() / "docs", dir / "docs");
+  fs::create_directory_symlink(fs::path(PNP_BIN_DIR).parent_path() / "python",
+                               dir / "build" / "python");
+  for (const char* checked_in : {"deploy", "docs", "examples"})
+    fs::create_directory_symlink(source_dir() / checked_in, dir / checked_in);
 }
 
 std::string tail(const std::string& text, std::size_t n = 4000) {

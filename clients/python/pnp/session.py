@@ -1,0 +1,101 @@
+"""A live episode on the inference service: one PredictSession stream, the choreographer's
+recurrent state kept by the server between calls."""
+
+from __future__ import annotations
+
+import dataclasses
+import queue
+
+import grpc
+import numpy as np
+
+from pnp import names
+from pnp.errors import PlatformError, from_rpc_error
+from pnp.policy.v1 import policy_service_pb2 as policy
+from pnp.sim_client import GOAL_SIZE, OBSERVATION_SIZE, vector3
+from pnp.common.v1 import common_pb2 as common
+
+_END = object()  # ends the request stream
+
+
+@dataclasses.dataclass(frozen=True)
+class Prediction:
+    action: np.ndarray  # (4,): dx, dy, dz, gripper in [-1, 1]
+    subtask: str | None  # "approach", "manipulate" or "retract"; None for an end-to-end policy
+    value: float  # the choreographer's value estimate
+    subtask_probabilities: np.ndarray
+    decided: bool  # the choreographer decided anew at this step (the last subtask ended)
+    step: int  # steps of this episode answered so far, this one included
+    placed: bool  # the served hierarchy judges the object placed
+    choreographer_checkpoint_id: int
+    expert_checkpoint_id: int
+
+
+class Session:
+    """act(observation, goal) once per environment step, in order; close() (or a `with`
+    block) ends the episode. Not for use from several threads at once."""
+
+    def __init__(self, stub, address: str, timeout_s: float | None = None):
+        self._address = address
+        self._requests: queue.Queue = queue.Queue()
+        self._responses = stub.PredictSession(iter(self._requests.get, _END), timeout=timeout_s)
+        self._closed = False
+
+    def act(self, observation, goal) -> Prediction:
+        if self._closed:
+            raise RuntimeError("act: the session is closed")
+        request = policy.PredictSessionRequest(
+            observation=common.Observation(values=_vector(observation, OBSERVATION_SIZE,
+                                                          "observation")),
+            goal=vector3(_vector(goal, GOAL_SIZE, "goal")))
+        self._requests.put(request)
+        try:
+            answer = next(self._responses)
+        except grpc.RpcError as e:
+            self._closed = True
+            raise from_rpc_error(e, "PredictSession", self._address) from None
+        except StopIteration:
+            self._closed = True
+            raise PlatformError("PredictSession", self._address, grpc.StatusCode.UNAVAILABLE,
+                                "the server ended the session") from None
+        p = answer.prediction
+        return Prediction(
+            action=np.array([p.action.dx, p.action.dy, p.action.dz, p.action.gripper]),
+            subtask=names.to_name(names.SUBTASKS, p.subtask),
+            value=p.value,
+            subtask_probabilities=np.array(p.subtask_probabilities),
+            decided=answer.decided,
+            step=answer.step,
+            placed=answer.placed,
+            choreographer_checkpoint_id=p.choreographer_checkpoint_id,
+            expert_checkpoint_id=p.expert_checkpoint_id)
+
+    def close(self) -> None:
+        """Ends the stream (the server's status, if an error, is raised)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._requests.put(_END)
+        try:
+            for _ in self._responses:  # none expected: the stream's end and its status
+                pass
+        except grpc.RpcError as e:
+            if e.code() != grpc.StatusCode.CANCELLED:
+                raise from_rpc_error(e, "PredictSession", self._address) from None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+def _vector(values, size: int, field: str) -> np.ndarray:
+    try:
+        v = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field}: expected {size} numbers, got {values!r}") from None
+    if v.shape != (size,):
+        raise ValueError(f"{field}: expected {size} values, got shape {v.shape}")
+    return v

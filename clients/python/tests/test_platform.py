@@ -1,0 +1,127 @@
+"""pnp.Platform against real training and inference services over one store."""
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+
+import grpc
+import numpy as np
+import pytest
+
+import pnp
+from conftest import BIN_DIR, SOURCE_DIR
+
+HELD_OUT_SEED = 424242
+
+
+@pytest.fixture(scope="module")
+def platform(sim_server, inference_server, approach_server):
+    with pnp.Platform({"sim": sim_server.address, "inference": inference_server.address,
+                       "approach": approach_server.address}) as p:
+        yield p
+
+
+def test_serving_status_names_the_served_hierarchy(platform):
+    status = platform.serving_status()
+    assert status["ready"]
+    roles = {r["role"]: r for r in status["roles"]}
+    assert set(roles) == {"approach", "manipulate", "retract", "hlc"}
+    assert all(r["robot"] == "panda" and r["object"] == "block" for r in roles.values())
+
+
+def test_a_session_answers_each_step(platform, sim_server):
+    with pnp.PickAndPlaceEnv(sim_server.address, robot="panda", world="paper") as env, \
+            platform.session() as session:
+        obs, _ = env.reset()
+        first = session.act(obs["observation"], obs["desired_goal"])
+        assert first.action.shape == (4,) and np.all(np.abs(first.action) <= 1)
+        assert first.subtask == "approach" and first.decided and first.step == 1
+        assert first.subtask_probabilities.shape == (3,)
+        assert np.isfinite(first.value) and first.choreographer_checkpoint_id > 0
+        obs, *_ = env.step(first.action)
+        assert session.act(obs["observation"], obs["desired_goal"]).step == 2
+
+
+def test_a_session_passes_on_the_servers_refusal(platform):
+    with platform.session() as session:
+        with pytest.raises(ValueError, match="observation: expected 25 values"):
+            session.act(np.zeros(24), np.zeros(3))
+        observation = np.zeros(25)
+        observation[4] = np.inf
+        with pytest.raises(pnp.PlatformError) as e:
+            session.act(observation, np.zeros(3))
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "observation" in e.value.details
+
+
+def test_the_example_plays_the_same_episodes_as_pnpctl_evaluate(sim_server, inference_server):
+    env = dict(os.environ, PNP_SIM_ADDRESS=sim_server.address,
+               PNP_INFERENCE_ADDRESS=inference_server.address)
+    example = subprocess.run(
+        [sys.executable, str(SOURCE_DIR / "examples" / "python" / "evaluate_served.py"),
+         "--episodes", "20", "--json", "--run-dir", "/nonexistent"],
+        env=env, capture_output=True, text=True, timeout=300, check=True)
+    ours = json.loads(example.stdout)
+    assert (ours["robot"], ours["object"], ours["world"]) == ("panda", "block", "paper")
+    reference = subprocess.run(
+        [str(BIN_DIR / "pnpctl"), "--sim", sim_server.address, "--inference",
+         inference_server.address, "evaluate", "--robot", "panda", "--object", "block",
+         "--world", "paper", "--episodes", "20", "--seed", str(HELD_OUT_SEED), "--json"],
+        capture_output=True, text=True, timeout=300, check=True)
+    theirs = json.loads(reference.stdout)
+    for key in ("episodes", "successes", "env_steps", "seed", "sequences"):
+        assert ours[key] == theirs[key], key
+    assert ours["successes"] > 0
+
+
+def test_a_training_run_from_start_to_its_metrics_and_checkpoints(platform):
+    run = platform.train("approach", robot="fetch", seed=2, max_steps=400,
+                         eval_interval_steps=200, eval_episodes=4, ddpg={"hidden": [16, 16]})
+    assert run.role == "approach" and run.run_id > 0
+    progress = list(run.watch())
+    assert progress[-1]["run"]["state"] == "succeeded"
+    assert [p["metric"]["env_steps"] for p in progress if p["metric"]][-1] == 400
+    final = run.wait()  # returns at once: the run has finished
+    assert final["state"] == "succeeded" and final["env_steps"] == 400
+    metrics = run.metrics()
+    rows = metrics.to_dict("records") if hasattr(metrics, "to_dict") else metrics
+    assert [row["env_steps"] for row in rows] == [200, 400]
+    checkpoints = run.checkpoints()
+    assert checkpoints and all(c["run_id"] == run.run_id for c in checkpoints)
+    assert run.run_id in [r["run_id"] for r in platform.runs()]
+    assert platform.run(run.run_id).role == "approach"
+    assert any(c["run_id"] == run.run_id for c in platform.checkpoints())
+
+
+def test_bad_training_requests_name_the_field(platform):
+    with pytest.raises(ValueError, match=r"^ddpg\.learning_rate: not a setting"):
+        platform.train("approach", ddpg={"learning_rate": 0.1})
+    with pytest.raises(ValueError, match="^role: expected one of"):
+        platform.train("grasp")
+    with pytest.raises(pnp.PlatformError) as e:
+        platform.train("approach", max_steps=-5)
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "max_steps" in e.value.details
+
+
+def test_promoting_an_unknown_checkpoint_is_not_found(platform):
+    with pytest.raises(pnp.PlatformError) as e:
+        platform.promote(999999)
+    assert e.value.code == grpc.StatusCode.NOT_FOUND
+    assert platform.serving_status()["ready"]  # nothing was lost
+
+
+def test_endpoints_refuse_unknown_names_and_a_token_without_tls(tmp_path):
+    with pytest.raises(ValueError, match="unknown service or setting 'simulator'"):
+        pnp.Platform({"simulator": "127.0.0.1:1"})
+    token = tmp_path / "token"
+    token.write_text("secret\n")
+    with pytest.raises(ValueError, match="^tls_ca: expected a CA file"):
+        pnp.Endpoints(token_file=str(token)).channel("127.0.0.1:1")
+    path = tmp_path / "endpoints.json"
+    path.write_text(json.dumps({"sim": "127.0.0.1:7", "inference": "127.0.0.1:8"}))
+    found = pnp.Endpoints.discover(str(tmp_path))
+    assert (found.sim, found.inference, found.hlc) == ("127.0.0.1:7", "127.0.0.1:8",
+                                                      "127.0.0.1:50055")
