@@ -163,12 +163,23 @@ void GatewayEpisodeRunner::check_controller_tcp() {
 
 EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
                                         const std::atomic<bool>& interrupted) {
-  const sim::WorldProfile world = served_world(policy_, interrupted);  // before anything moves
-  check_controller_tcp();
+  // Before anything moves: the served world and the controller's grip point. Ctrl-C while
+  // they are asked for ends the episode before its first cycle, and the arm is still
+  // emergency-stopped below, as on Ctrl-C in a cycle; any other failure here is the run's.
+  sim::WorldProfile world = sim::kDefaultWorldProfile;
+  std::optional<std::string> interrupted_early;
+  try {
+    world = served_world(policy_, interrupted);
+    check_controller_tcp();
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kCancelled && !interrupted.load()) throw;
+    interrupted_early = std::string("interrupted: ") + e.what();
+  }
   Episode episode(options, interrupted, policy_, world);
   episode.report.seed = options.seed;
+  if (interrupted_early) episode.end(EpisodeEnd::kInterrupted, *interrupted_early);
   try {
-    run_cycles(episode);
+    if (!interrupted_early) run_cycles(episode);
   } catch (const Error& e) {
     if (e.code() == ErrorCode::kCancelled || interrupted.load()) {
       episode.end(EpisodeEnd::kInterrupted, std::string("interrupted: ") + e.what());

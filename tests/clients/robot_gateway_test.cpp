@@ -417,6 +417,27 @@ TEST_F(GatewayEndToEnd, InterruptEmergencyStopsTheArmAndEndsTheRun) {
   EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
 }
 
+// Ctrl-C while the runner still waits for an inference service that is not up (before the
+// first cycle): the episode ends interrupted and the arm is emergency-stopped, rather than
+// the wait's cancellation escaping the runner and leaving the arm as it was.
+TEST_F(GatewayEndToEnd, InterruptWhileWaitingForInferenceStillEmergencyStopsTheArm) {
+  std::atomic<bool> interrupted{false};
+  auto link = link_to(controller_server_->port(), interrupted);
+  link->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  auto unreachable = pv1::PolicyService::NewStub(
+      grpc::CreateChannel("127.0.0.1:1", grpc::InsecureChannelCredentials()));
+  interrupted = true;
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, *link, *unreachable, recorder());
+  const EpisodeReport report = runner.run(episode(904), interrupted);
+  EXPECT_EQ(report.end, EpisodeEnd::kInterrupted);
+  EXPECT_NE(report.reason.find("waiting for the inference service"), std::string::npos)
+      << report.reason;
+  EXPECT_EQ(report.steps, 0);
+  EXPECT_EQ(report.arm_left, "emergency_stop");
+  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
+}
+
 TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
   StalledPolicyService stalled;
   services::ServerRuntime stalled_server({"127.0.0.1:0", 1 << 20, {&stalled}, {}});
