@@ -17,9 +17,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <thread>
 
 #include "clients/robot_gateway/gateway_episode.h"
+#include "clients/robot_gateway/gateway_metrics.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
 #include "services/common/address.h"
@@ -37,7 +39,8 @@ int main(int argc, char** argv) {
   std::string name = "pnp-robot-gateway";
   int episodes = 5;
   std::uint64_t seed = 1000;
-  bool dry_run = false, trace = false, json = false, quiet = false;
+  bool dry_run = false, trace = false, json = false, quiet = false, public_metrics = false;
+  std::string metrics_address;
   app.add_option("--controller", controller_address, "robot controller host:port")
       ->envname("PNP_ROBOT_CONTROLLER_ADDRESS")
       ->capture_default_str();
@@ -55,6 +58,11 @@ int main(int argc, char** argv) {
                "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
   app.add_flag("--quiet", quiet, "no per-event log lines on stderr");
+  app.add_option("--metrics-address", metrics_address,
+                 "host:port for Prometheus /metrics (port 0 picks one, logged as metrics_port; "
+                 "empty: off)");
+  app.add_flag("--public-metrics", public_metrics,
+               "allow /metrics (plaintext HTTP, read-only counters) on a non-loopback address");
   services::ClientTlsFiles tls;  // the controller's and the inference service's
   services::add_client_security_flags(app, tls);
   CLI11_PARSE(app, argc, argv);
@@ -65,7 +73,19 @@ int main(int argc, char** argv) {
     services::validate_address(controller_address, "--controller");
     services::validate_address(inference_address, "--inference");
     services::validate(tls);
+    if (!metrics_address.empty() && !services::is_loopback_address(metrics_address) &&
+        !public_metrics)
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "--metrics-address " + metrics_address +
+                      " is beyond loopback: pass --public-metrics (its counters are public)");
     const robot::GatewayConfig config = robot::GatewayConfig::load(config_path);
+    services::MetricsRegistry metrics;
+    gateway::GatewayMetrics episode_metrics(metrics);
+    std::optional<services::MetricsHttpServer> metrics_http;
+    if (!metrics_address.empty()) {
+      metrics_http.emplace(metrics_address, metrics);
+      services::log_event("gateway", "listening", {{"metrics_port", metrics_http->port()}});
+    }
     // Ctrl-C or SIGTERM: the running episode stops the arm and ends; a second one exits
     // at once (the arm's own dead-man, the lease, then holds it).
     std::atomic<bool> interrupted{false}, finished{false};
@@ -117,6 +137,7 @@ int main(int argc, char** argv) {
                                     .dry_run = dry_run,
                                     .trace = trace},
                                    interrupted));
+      episode_metrics.record(reports.back());
       if (gateway::ends_run(reports.back().end)) {
         std::fprintf(stderr, "pnp-robot-gateway: run ended: %s\n", reports.back().reason.c_str());
         break;

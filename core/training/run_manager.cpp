@@ -263,6 +263,8 @@ RunManager::Load RunManager::load() {
   }
   std::lock_guard lock(mutex_);
   Load load;
+  load.store_write_errors = store_write_errors_;
+  load.store_faulty = store_fault_.has_value();
   // The store's queue for this role, less the run this manager trains (which it owns).
   load.queued = static_cast<std::size_t>(std::max<std::int64_t>(0, claimable - (active_ ? 1 : 0)));
   if (!active_) return load;
@@ -302,10 +304,12 @@ void RunManager::note_store_write(const std::exception* failure) {
   const auto* store_error = dynamic_cast<const store::StoreError*>(failure);
   if (failure && (!store_error || dynamic_cast<const store::BusyError*>(failure))) return;
   std::lock_guard lock(mutex_);
-  if (failure)
+  if (failure) {
     store_fault_ = failure->what();
-  else
+    ++store_write_errors_;
+  } else {
     store_fault_.reset();
+  }
 }
 
 std::optional<std::string> RunManager::store_fault() const {

@@ -101,6 +101,8 @@ class RunManager {
     std::optional<std::int64_t> active;  // the run training now
     long long active_env_steps = 0;      // its training env steps so far
     double active_steps_per_s = 0;       // since it (re)started; 0 before its first report
+    long long store_write_errors = 0;    // writes failed for a reason other than a busy lock
+    bool store_faulty = false;           // the last write failed so (store_fault())
   };
   Load load();
 
@@ -155,6 +157,7 @@ class RunManager {
   std::optional<Active> active_;
   std::uint64_t generation_ = 0;
   std::optional<std::string> store_fault_;  // guarded by mutex_
+  long long store_write_errors_ = 0;        // guarded by mutex_
 
   // Last: stopped and joined before the members above go.
   std::jthread worker_;

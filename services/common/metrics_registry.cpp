@@ -1,9 +1,9 @@
 #include "services/common/metrics_registry.h"
 
+#include <prometheus/text_serializer.h>
+
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <iterator>
 #include <type_traits>
 
 #include "common/error.h"
@@ -76,106 +76,15 @@ std::string_view type_name(MetricType type) {
   return "untyped";
 }
 
-// What client_golang writes (Go's strconv 'g', shortest): the shortest round-trip digits,
-// in exponent form below 1e-4 and from 1e6 on: 1, 0.25, 0.0001, 5e-05, 1.5e+06, +Inf.
-void append_value(std::string& out, double value) {
-  if (std::isnan(value)) {
-    out += "NaN";
-    return;
-  }
-  if (std::isinf(value)) {
-    out += value > 0 ? "+Inf" : "-Inf";
-    return;
-  }
-  char buffer[64];
-  auto result =
-      std::to_chars(std::begin(buffer), std::end(buffer), value, std::chars_format::scientific);
-  const std::string_view scientific(buffer, static_cast<std::size_t>(result.ptr - buffer));
-  const int exponent = std::stoi(std::string(scientific.substr(scientific.find('e') + 1)));
-  if (exponent < -4 || exponent >= 6) {
-    out += scientific;
-    return;
-  }
-  result = std::to_chars(std::begin(buffer), std::end(buffer), value, std::chars_format::fixed);
-  out.append(buffer, result.ptr);
-}
-
-void append_escaped(std::string& out, std::string_view text, bool escape_quotes) {
-  for (char c : text) {
-    if (c == '\\') {
-      out += "\\\\";
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (c == '"' && escape_quotes) {
-      out += "\\\"";
-    } else {
-      out += c;
-    }
-  }
-}
-
-// name{a="x",b="y",le="0.1"} value
-void append_series(std::string& out, std::string_view name, const Labels& labels,
-                   std::string_view le, std::string_view value) {
-  out += name;
-  if (!labels.empty() || !le.empty()) {
-    out += '{';
-    bool first = true;
-    for (const auto& [label, label_value] : labels) {
-      if (!first) out += ',';
-      first = false;
-      out.append(label).append("=\"");
-      append_escaped(out, label_value, true);
-      out += '"';
-    }
-    if (!le.empty()) out.append(first ? "" : ",").append("le=\"").append(le).append("\"");
-    out += '}';
-  }
-  out.append(" ").append(value).append("\n");
-}
-
-std::string formatted(double value) {
-  std::string out;
-  append_value(out, value);
-  return out;
-}
-
 }  // namespace
 
-void Counter::inc(double amount) {
-  if (!(amount >= 0.0))
-    throw_invalid_argument("counter increment", "a non-negative amount", std::to_string(amount));
-  value_.fetch_add(amount, std::memory_order_relaxed);
-}
-
-Histogram::Histogram(std::vector<double> bounds) : bounds_(std::move(bounds)) {
-  check_bounds(bounds_);
-  counts_ = std::vector<std::atomic<std::uint64_t>>(bounds_.size() + 1);
-}
-
-void Histogram::observe(double value) {
-  // Bucket k holds values in (bounds[k-1], bounds[k]]; NaN is above every bound.
-  const auto k =
-      std::isnan(value)
-          ? bounds_.size()
-          : static_cast<std::size_t>(std::lower_bound(bounds_.begin(), bounds_.end(), value) -
-                                     bounds_.begin());
-  counts_[k].fetch_add(1, std::memory_order_relaxed);
-  sum_.fetch_add(value, std::memory_order_relaxed);
-}
-
-std::vector<std::uint64_t> Histogram::bucket_counts() const {
-  std::vector<std::uint64_t> out;
-  out.reserve(counts_.size());
-  for (const auto& count : counts_) out.push_back(count.load(std::memory_order_relaxed));
-  return out;
-}
+MetricsRegistry::MetricsRegistry() : registry_(std::make_shared<prometheus::Registry>()) {}
 
 template <typename Metric>
 Metric& MetricsRegistry::find_or_add(MetricType type, std::string_view name, std::string_view help,
                                      const std::vector<double>& bounds, const Labels& labels) {
   check_metric_name(name);
-  Labels sorted = sorted_labels(name, labels, type == MetricType::kHistogram);
+  const Labels sorted = sorted_labels(name, labels, type == MetricType::kHistogram);
   std::vector<std::string> label_names;
   for (const auto& label : sorted) label_names.push_back(label.first);
 
@@ -196,13 +105,15 @@ Metric& MetricsRegistry::find_or_add(MetricType type, std::string_view name, std
         throw_invalid_argument(quoted(name), "a name no histogram's series uses",
                                "a clash with a histogram's " + std::string(suffix) + " series");
     }
+    auto& added = prometheus::detail::Builder<Metric>()
+                      .Name(std::string(name))
+                      .Help(std::string(help))
+                      .Register(*registry_);
     family = families_
                  .emplace(std::string(name),
-                          Family{type,
-                                 std::string(help),
+                          Family{type, std::string(help),
                                  type == MetricType::kHistogram ? bounds : std::vector<double>{},
-                                 std::move(label_names),
-                                 {}})
+                                 std::move(label_names), &added})
                  .first;
   } else {
     const Family& f = family->second;
@@ -221,19 +132,14 @@ Metric& MetricsRegistry::find_or_add(MetricType type, std::string_view name, std
       throw_invalid_argument(quoted(name) + " labels", "the label names first registered",
                              "other label names");
   }
-
-  auto& children = family->second.children;
-  auto child = children.find(sorted);
-  if (child == children.end()) {
-    std::unique_ptr<Metric> metric;
-    if constexpr (std::is_same_v<Metric, Histogram>) {
-      metric = std::make_unique<Histogram>(bounds);
-    } else {
-      metric = std::make_unique<Metric>();
-    }
-    child = children.emplace(std::move(sorted), std::move(metric)).first;
+  // The family returns the existing metric for a label set it has seen.
+  auto& metrics = *std::get<prometheus::Family<Metric>*>(family->second.metrics);
+  const prometheus::Labels keyed(sorted.begin(), sorted.end());
+  if constexpr (std::is_same_v<Metric, Histogram>) {
+    return metrics.Add(keyed, bounds);
+  } else {
+    return metrics.Add(keyed);
   }
-  return *std::get<std::unique_ptr<Metric>>(child->second);
 }
 
 Counter& MetricsRegistry::counter(std::string_view name, std::string_view help,
@@ -251,35 +157,7 @@ Histogram& MetricsRegistry::histogram(std::string_view name, std::string_view he
 }
 
 std::string MetricsRegistry::render() const {
-  std::string out;
-  std::lock_guard lock(mutex_);
-  for (const auto& [name, family] : families_) {
-    out.append("# HELP ").append(name).append(" ");
-    append_escaped(out, family.help, false);
-    out.append("\n# TYPE ").append(name).append(" ").append(type_name(family.type)).append("\n");
-    for (const auto& [labels, child] : family.children) {
-      if (const auto* counter = std::get_if<std::unique_ptr<Counter>>(&child)) {
-        append_series(out, name, labels, {}, formatted((*counter)->value()));
-      } else if (const auto* gauge = std::get_if<std::unique_ptr<Gauge>>(&child)) {
-        append_series(out, name, labels, {}, formatted((*gauge)->value()));
-      } else {
-        const Histogram& h = *std::get<std::unique_ptr<Histogram>>(child);
-        const auto counts = h.bucket_counts();
-        // _count is the +Inf bucket, both from the same reads: a scrape racing an
-        // observation still shows them equal.
-        std::uint64_t cumulative = 0;
-        for (std::size_t k = 0; k < counts.size(); ++k) {
-          cumulative += counts[k];
-          append_series(out, name + "_bucket", labels,
-                        k < h.bounds().size() ? formatted(h.bounds()[k]) : "+Inf",
-                        std::to_string(cumulative));
-        }
-        append_series(out, name + "_sum", labels, {}, formatted(h.sum()));
-        append_series(out, name + "_count", labels, {}, std::to_string(cumulative));
-      }
-    }
-  }
-  return out;
+  return prometheus::TextSerializer().Serialize(registry_->Collect());
 }
 
 }  // namespace pnp::services

@@ -11,27 +11,38 @@
 #include <unordered_map>
 
 #include "common/handover.h"
-#include "services/common/status.h"
 
 namespace pnp::services {
 namespace {
 
 namespace gx = grpc::experimental;
 
-constexpr std::string_view kRequests = "pnp_rpc_requests_total";
-constexpr std::string_view kRequestsHelp = "RPCs finished, by full method name and status code.";
-constexpr std::string_view kDuration = "pnp_rpc_duration_seconds";
-constexpr std::string_view kDurationHelp =
-    "RPC duration from the call's arrival to its final status, in seconds.";
-constexpr std::string_view kInFlight = "pnp_rpc_in_flight";
-constexpr std::string_view kInFlightHelp = "RPCs started and not yet finished.";
+// The names and labels of go-grpc-prometheus, which Grafana's gRPC dashboards and most
+// alert rules expect.
+constexpr std::string_view kStarted = "grpc_server_started_total";
+constexpr std::string_view kStartedHelp = "Total number of RPCs started on the server.";
+constexpr std::string_view kHandled = "grpc_server_handled_total";
+constexpr std::string_view kHandledHelp =
+    "Total number of RPCs completed on the server, regardless of success or failure.";
+constexpr std::string_view kHandling = "grpc_server_handling_seconds";
+constexpr std::string_view kHandlingHelp =
+    "Histogram of response latency (seconds) of gRPC that had been application-level handled "
+    "by the server.";
 constexpr std::string_view kUnregistered = "unregistered";
 constexpr int kCodes = grpc::StatusCode::UNAUTHENTICATED + 1;  // OK = 0 ... 16
 
-const std::vector<double>& duration_bounds() {
-  static const std::vector<double> bounds = {50e-6, 100e-6, 250e-6, 500e-6, 1e-3, 2.5e-3,
-                                             5e-3,  10e-3,  25e-3,  50e-3,  0.1,  0.25,
-                                             0.5,   1,      2.5,    5,      10};
+// Go's codes.Code names, as go-grpc-prometheus writes grpc_code.
+constexpr std::array<std::string_view, kCodes> kGoCodeNames = {
+    "OK",       "Canceled",       "Unknown",          "InvalidArgument",   "DeadlineExceeded",
+    "NotFound", "AlreadyExists",  "PermissionDenied", "ResourceExhausted", "FailedPrecondition",
+    "Aborted",  "OutOfRange",     "Unimplemented",    "Internal",          "Unavailable",
+    "DataLoss", "Unauthenticated"};
+
+// 50 us to 10 s; 2 ms is a bound so that an alert on a 2 ms p99 reads an exact bucket.
+const std::vector<double>& handling_bounds() {
+  static const std::vector<double> bounds = {50e-6,  100e-6, 250e-6, 500e-6, 1e-3,  2e-3,
+                                             2.5e-3, 5e-3,   10e-3,  25e-3,  50e-3, 0.1,
+                                             0.25,   0.5,    1,      2.5,    5,     10};
   return bounds;
 }
 
@@ -39,44 +50,67 @@ int code_index(grpc::StatusCode code) {
   return code >= 0 && code < kCodes ? code : grpc::StatusCode::UNKNOWN;
 }
 
-// One method's series. Each code's counter and histogram are looked up in the registry on
-// first use and cached here, so a finishing call touches only atomics.
+std::string_view type_label(gx::ServerRpcInfo::Type type) {
+  switch (type) {
+    case gx::ServerRpcInfo::Type::UNARY:
+      return "unary";
+    case gx::ServerRpcInfo::Type::CLIENT_STREAMING:
+      return "client_stream";
+    case gx::ServerRpcInfo::Type::SERVER_STREAMING:
+      return "server_stream";
+    case gx::ServerRpcInfo::Type::BIDI_STREAMING:
+      return "bidi_stream";
+  }
+  return "unary";
+}
+
+// One method's series. Each code's counter is looked up in the registry on first use and
+// cached here, so a finishing call touches only atomics and its histogram.
 class MethodMetrics {
  public:
-  MethodMetrics(MetricsRegistry& registry, std::string method)
+  // `full_method`: "/package.Service/Method", or "unregistered".
+  MethodMetrics(MetricsRegistry& registry, std::string_view full_method,
+                gx::ServerRpcInfo::Type type)
       : registry_(registry),
-        method_(std::move(method)),
-        in_flight_(registry.gauge(kInFlight, kInFlightHelp, {{"method", method_}})) {}
+        labels_(method_labels(full_method, type)),
+        started_(registry.counter(kStarted, kStartedHelp, labels_)),
+        handling_(registry.histogram(kHandling, kHandlingHelp, handling_bounds(), labels_)) {}
 
-  Gauge& in_flight() { return in_flight_; }
+  void start() { started_.Increment(); }
 
   void finish(grpc::StatusCode status, double seconds) {
     const int code = code_index(status);
-    auto& slot = slots_[static_cast<std::size_t>(code)];
-    Counter* requests = slot.requests.load(std::memory_order_acquire);
-    Histogram* duration = slot.duration.load(std::memory_order_acquire);
-    if (requests == nullptr || duration == nullptr) {
-      // Racing first calls find the same metrics: the registry returns one per label set.
-      const Labels labels = {{"method", method_},
-                             {"code", std::string(status_code_name(grpc::StatusCode(code)))}};
-      requests = &registry_.counter(kRequests, kRequestsHelp, labels);
-      duration = &registry_.histogram(kDuration, kDurationHelp, duration_bounds(), labels);
-      slot.requests.store(requests, std::memory_order_release);
-      slot.duration.store(duration, std::memory_order_release);
+    auto& slot = handled_[static_cast<std::size_t>(code)];
+    Counter* handled = slot.load(std::memory_order_acquire);
+    if (handled == nullptr) {
+      // Racing first calls find the same counter: the registry returns one per label set.
+      Labels labels = labels_;
+      labels.emplace_back("grpc_code", kGoCodeNames[static_cast<std::size_t>(code)]);
+      handled = &registry_.counter(kHandled, kHandledHelp, labels);
+      slot.store(handled, std::memory_order_release);
     }
-    requests->inc();
-    duration->observe(seconds);
+    handled->Increment();
+    handling_.Observe(seconds);
   }
 
  private:
-  struct Slot {
-    std::atomic<Counter*> requests{nullptr};
-    std::atomic<Histogram*> duration{nullptr};
-  };
+  static Labels method_labels(std::string_view full_method, gx::ServerRpcInfo::Type type) {
+    std::string_view service = kUnregistered, method = kUnregistered;
+    if (const auto slash = full_method.rfind('/');
+        full_method.starts_with('/') && slash != std::string_view::npos && slash > 0) {
+      service = full_method.substr(1, slash - 1);
+      method = full_method.substr(slash + 1);
+    }
+    return {{"grpc_type", std::string(type_label(type))},
+            {"grpc_service", std::string(service)},
+            {"grpc_method", std::string(method)}};
+  }
+
   MetricsRegistry& registry_;
-  std::string method_;
-  Gauge& in_flight_;
-  std::array<Slot, kCodes> slots_;
+  Labels labels_;
+  Counter& started_;
+  Histogram& handling_;
+  std::array<std::atomic<Counter*>, kCodes> handled_{};
 };
 
 // Lives as long as its call (gRPC owns it). A call is recorded when the server sends its
@@ -86,7 +120,7 @@ class RpcMetricsInterceptor final : public gx::Interceptor {
  public:
   explicit RpcMetricsInterceptor(MethodMetrics& metrics)
       : metrics_(metrics), start_(std::chrono::steady_clock::now()) {
-    metrics_.in_flight().inc();
+    metrics_.start();
   }
   ~RpcMetricsInterceptor() override {
     receive_handover(&handed_over_);  // the body runs before handed_over_ is destroyed
@@ -105,7 +139,6 @@ class RpcMetricsInterceptor final : public gx::Interceptor {
  private:
   void finish(grpc::StatusCode code) {
     if (finished_.exchange(true)) return;
-    metrics_.in_flight().dec();
     metrics_.finish(
         code, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
   }
@@ -136,18 +169,17 @@ class RpcMetricsFactory final : public gx::ServerInterceptorFactoryInterface {
     const std::string_view method =
         registered && info->method() != nullptr ? info->method() : kUnregistered;
     // gRPC takes ownership of the interceptor.
-    return std::make_unique<RpcMetricsInterceptor>(metrics_for(method)).release();
+    return std::make_unique<RpcMetricsInterceptor>(metrics_for(method, info->type())).release();
   }
 
  private:
-  MethodMetrics& metrics_for(std::string_view method) {
+  MethodMetrics& metrics_for(std::string_view method, gx::ServerRpcInfo::Type type) {
+    // An unregistered call's type is gRPC's guess (bidi): the label set stays one.
+    const auto key = std::string(method);
     std::lock_guard lock(mutex_);
-    auto it = methods_.find(method);
+    auto it = methods_.find(key);
     if (it == methods_.end())
-      it = methods_
-               .emplace(std::string(method),
-                        std::make_unique<MethodMetrics>(registry_, std::string(method)))
-               .first;
+      it = methods_.emplace(key, std::make_unique<MethodMetrics>(registry_, method, type)).first;
     return *it->second;
   }
 

@@ -1,12 +1,15 @@
 #pragma once
-// Per-RPC metrics as a gRPC server interceptor: every call, unary or streaming, is counted
-// once when the server sends its final status, labelled with the full method name and the
-// status code name:
-//   pnp_rpc_requests_total{method,code}     counter
-//   pnp_rpc_duration_seconds{method,code}   histogram, 50 us to 10 s
-//   pnp_rpc_in_flight{method}               gauge
-// Calls to methods no service registers carry method="unregistered": the client chooses
-// those names, and label values must stay a bounded set.
+// Per-RPC metrics as a gRPC server interceptor, with go-grpc-prometheus' names and labels
+// (what Grafana's gRPC dashboards and common alert rules query): every call, unary or
+// streaming, is counted when it starts and once when the server sends its final status:
+//   grpc_server_started_total{grpc_type,grpc_service,grpc_method}             counter
+//   grpc_server_handled_total{grpc_type,grpc_service,grpc_method,grpc_code}   counter
+//   grpc_server_handling_seconds{grpc_type,grpc_service,grpc_method}          histogram, 50 us to
+//   10 s
+// grpc_type is unary, client_stream, server_stream or bidi_stream; grpc_code is Go's name
+// of the status code (OK, InvalidArgument, ...). Calls in flight: started - handled. Calls
+// to methods no service registers carry grpc_service and grpc_method "unregistered": the
+// client chooses those names, and label values must stay a bounded set.
 
 #include <grpcpp/support/server_interceptor.h>
 

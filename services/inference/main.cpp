@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const std::string store = resolve_store_path(db, !create_db);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "inference");
-    PolicyServiceImpl service(store, kind, &limits);
+    PolicyServiceImpl service(store, kind, &limits, metrics_address.empty() ? nullptr : &metrics);
     const auto audit = open_audit_trail(store, "inference");
     security.audit = audit.get();
     ServerRuntime runtime({.address = address,
@@ -86,8 +86,8 @@ int main(int argc, char** argv) {
         [&] {
           const auto stats = service.batch_stats();
           for (std::size_t k = 0; k < stats.size() && k < batches.size(); ++k) {
-            batched_requests[k]->set(static_cast<double>(stats[k].requests));
-            batches[k]->set(static_cast<double>(stats[k].batches));
+            batched_requests[k]->Set(static_cast<double>(stats[k].requests));
+            batches[k]->Set(static_cast<double>(stats[k].batches));
           }
           try {
             if (service.reload()) log_event("inference", "reloaded");

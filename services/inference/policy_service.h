@@ -16,6 +16,7 @@
 
 #include "common/shared_snapshot.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "services/common/metrics_registry.h"
 #include "services/common/stream_limits.h"
 #include "serving/served_policy.h"
 #include "store/run_store.h"
@@ -24,10 +25,12 @@ namespace pnp::services {
 
 class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
  public:
-  // `limits` (null: none) bounds the PredictSession streams; it must outlive the service.
+  // `limits` (null: none) bounds the PredictSession streams; `metrics` (null: none) gets
+  // pnp_inference_session_step_seconds, each session answer's time in the server (a
+  // session's own RPC duration is the whole episode's). Both must outlive the service.
   explicit PolicyServiceImpl(const std::string& db_path,
                              serving::PolicyKind kind = serving::PolicyKind::kHierarchy,
-                             StreamLimits* limits = nullptr);
+                             StreamLimits* limits = nullptr, MetricsRegistry* metrics = nullptr);
 
   // Loads the promoted checkpoints of the served kind if they differ from the served
   // ones; returns whether the policy changed. A failure keeps the current one and is
@@ -60,6 +63,7 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
   const serving::PolicyKind kind_;
   const std::string db_path_;
   StreamLimits* const limits_;
+  Histogram* const session_step_seconds_;  // null: not recorded
   std::mutex store_mutex_;  // guards both connections: each is used by one thread at a time
   store::RunStore store_;   // read-only: serving
   std::optional<store::RunStore> writer_;  // opened at the first promotion

@@ -125,7 +125,7 @@ SimServiceImpl::SimServiceImpl(MetricsRegistry* metrics, StreamLimits* limits)
       limits_(limits) {}
 
 void SimServiceImpl::count_steps(const sv1::StepResponse& response) {
-  if (env_steps_) env_steps_->inc(response.results_size());
+  if (env_steps_) env_steps_->Increment(response.results_size());
 }
 
 grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEnvRequest* request,

@@ -39,17 +39,32 @@ class TrainingGauges {
                              "Training environment steps of the active run", {{"role", role}})),
         rate_(metrics.gauge("pnp_training_env_steps_per_second",
                             "Training environment steps per second of the active run",
-                            {{"role", role}})) {}
+                            {{"role", role}})),
+        store_errors_(metrics.counter(
+            "pnp_store_write_errors_total",
+            "Store writes that failed for a reason other than a busy lock (disk full, I/O)",
+            {{"role", role}})),
+        store_fault_(metrics.gauge("pnp_store_fault",
+                                   "1 while the store's last write failed (the service is "
+                                   "NOT_SERVING), 0 otherwise",
+                                   {{"role", role}})) {}
 
   void update(const pnp::training::RunManager::Load& load) {
-    queued_.set(static_cast<double>(load.queued));
-    active_.set(static_cast<double>(load.active.value_or(0)));
-    steps_.set(static_cast<double>(load.active_env_steps));
-    rate_.set(load.active_steps_per_s);
+    queued_.Set(static_cast<double>(load.queued));
+    active_.Set(static_cast<double>(load.active.value_or(0)));
+    steps_.Set(static_cast<double>(load.active_env_steps));
+    rate_.Set(load.active_steps_per_s);
+    // The manager counts since it started; the counter takes what is new.
+    store_errors_.Increment(static_cast<double>(load.store_write_errors - counted_errors_));
+    counted_errors_ = load.store_write_errors;
+    store_fault_.Set(load.store_faulty ? 1 : 0);
   }
 
  private:
   pnp::services::Gauge &queued_, &active_, &steps_, &rate_;
+  pnp::services::Counter& store_errors_;
+  pnp::services::Gauge& store_fault_;
+  long long counted_errors_ = 0;
 };
 
 }  // namespace

@@ -17,10 +17,14 @@
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/metrics_scrape.h"
 
 namespace {
 
 using pnp::integration::ChildProcess;
+using pnp::integration::http_get;
+using pnp::integration::metric_sum;
+using pnp::integration::metrics_port;
 using pnp::integration::TempDir;
 using namespace std::chrono_literals;
 
@@ -43,15 +47,22 @@ struct RobotCell {
     return db;
   }
 
-  void start_gateway(const TempDir& dir, int episodes, std::optional<ChildProcess>& gateway) {
-    gateway.emplace(
-        "gateway",
-        std::vector<std::string>{PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
-                                 "127.0.0.1:" + std::to_string(controller.port()), "--inference",
-                                 "127.0.0.1:" + std::to_string(inference.port()), "--config",
-                                 PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes",
-                                 std::to_string(episodes), "--seed", "1000", "--json"},
-        dir.path());
+  void start_gateway(const TempDir& dir, int episodes, std::optional<ChildProcess>& gateway,
+                     const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args{PNP_BIN_DIR "/pnp-robot-gateway",
+                                  "--controller",
+                                  "127.0.0.1:" + std::to_string(controller.port()),
+                                  "--inference",
+                                  "127.0.0.1:" + std::to_string(inference.port()),
+                                  "--config",
+                                  PNP_SOURCE_DIR "/deploy/robot/gateway.json",
+                                  "--episodes",
+                                  std::to_string(episodes),
+                                  "--seed",
+                                  "1000",
+                                  "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    gateway.emplace("gateway", std::move(args), dir.path());
   }
 
   ChildProcess inference;
@@ -122,6 +133,26 @@ TEST(GatewayStall, CtrlCDuringAStallEndsTheGatewayAtOnce) {
   EXPECT_TRUE(status->exited) << status->describe();
   EXPECT_EQ(status->code, 130) << gateway.diagnostics();
   EXPECT_LT(seconds, 1.0) << gateway.diagnostics();
+}
+
+// An operator scrapes a running gateway: the first episode's end and cycles are there by
+// the time the second starts.
+TEST(GatewayMetrics, AScrapeMidRunShowsTheFinishedEpisodes) {
+  TempDir dir("gateway_metrics");
+  RobotCell cell(dir);
+  ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
+  ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
+  std::optional<ChildProcess> gateway;
+  cell.start_gateway(dir, 3, gateway, {"--metrics-address", "127.0.0.1:0"});
+  ASSERT_TRUE(wait_for_episode_start(*gateway, 2, 60s)) << gateway->diagnostics();
+  const int port = metrics_port(*gateway);
+  ASSERT_GT(port, 0) << gateway->diagnostics();
+  const std::string exposition = http_get(port, "/metrics");
+  EXPECT_GE(metric_sum(exposition, "pnp_gateway_episodes_total", {}), 1.0) << exposition;
+  EXPECT_GT(metric_sum(exposition, "pnp_gateway_cycle_seconds_count", {}), 0.0) << exposition;
+  EXPECT_NE(exposition.find("pnp_gateway_missed_periods_total"), std::string::npos);
+  const auto status = gateway->wait(120s);
+  ASSERT_TRUE(status && status->ok()) << gateway->diagnostics();
 }
 
 TEST(InferenceFault, AKilledInferenceServiceCostsTheEpisodeAndARestartedOneServesTheNext) {

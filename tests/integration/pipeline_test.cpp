@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "tests/integration/child_process.h"
+#include "tests/integration/metrics_scrape.h"
 #include "tests/integration/store_reader.h"
 
 namespace pnp::integration {
@@ -64,59 +65,6 @@ CliResult run_pnpctl(const TempDir& dir, const std::string& name, std::vector<st
   result.out = cli.stdout_text();
   result.err = cli.stderr_text();
   return result;
-}
-
-// GET http://127.0.0.1:port/path, the whole response (headers included).
-std::string http_get(int port, const std::string& path) {
-  struct Socket {
-    int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    ~Socket() {
-      if (fd >= 0) ::close(fd);
-    }
-  } socket;
-  if (socket.fd < 0) return {};
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<std::uint16_t>(port));
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  sockaddr generic{};
-  static_assert(sizeof address >= sizeof generic);
-  std::memcpy(&generic, &address, sizeof generic);
-  if (::connect(socket.fd, &generic, sizeof address) != 0) return {};
-  const std::string request =
-      "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
-  if (::send(socket.fd, request.data(), request.size(), 0) != static_cast<ssize_t>(request.size()))
-    return {};
-  std::string response;
-  std::array<char, 4096> buffer{};
-  for (;;) {
-    const ssize_t got = ::recv(socket.fd, buffer.data(), buffer.size(), 0);
-    if (got <= 0) break;
-    response.append(buffer.data(), static_cast<std::size_t>(got));
-  }
-  return response;
-}
-
-// The sum of a Prometheus family's samples whose labels include every one of `labels`.
-double metric_sum(const std::string& exposition, const std::string& family,
-                  const std::vector<std::string>& labels) {
-  double sum = 0;
-  std::istringstream lines(exposition);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind(family + "{", 0) != 0 && line.rfind(family + " ", 0) != 0) continue;
-    bool all = true;
-    for (const auto& label : labels) all = all && line.find(label) != std::string::npos;
-    if (all) sum += std::stod(line.substr(line.rfind(' ') + 1));
-  }
-  return sum;
-}
-
-// The "metrics_port" of a server's "listening" log line (stderr's first).
-int metrics_port(const ChildProcess& server) {
-  const std::string err = server.stderr_text();
-  const auto listening = nlohmann::json::parse(err.substr(0, err.find('\n')), nullptr, false);
-  if (listening.is_discarded() || !listening.contains("metrics_port")) return 0;
-  return listening.at("metrics_port").get<int>();
 }
 
 void expect_clean_exit(ChildProcess& server) {
@@ -249,12 +197,13 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
   const int sim_metrics_port = metrics_port(sim);
   ASSERT_GT(sim_metrics_port, 0) << sim.diagnostics();
   const std::string exposition = http_get(sim_metrics_port, "/metrics");
-  EXPECT_GT(metric_sum(exposition, "pnp_rpc_requests_total",
-                       {"method=\"/pnp.sim.v1.SimulationService/StreamRollout\"", "code=\"OK\""}),
+  const std::string sim_service = "grpc_service=\"pnp.sim.v1.SimulationService\"";
+  EXPECT_GT(metric_sum(exposition, "grpc_server_handled_total",
+                       {sim_service, "grpc_method=\"StreamRollout\"", "grpc_code=\"OK\""}),
             0.0)
       << exposition;
-  EXPECT_GT(metric_sum(exposition, "pnp_rpc_requests_total",
-                       {"method=\"/pnp.sim.v1.SimulationService/Step\"", "code=\"OK\""}),
+  EXPECT_GT(metric_sum(exposition, "grpc_server_handled_total",
+                       {sim_service, "grpc_method=\"Step\"", "grpc_code=\"OK\""}),
             0.0)
       << exposition;
 

@@ -24,6 +24,7 @@
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/metrics_scrape.h"
 #include "tests/integration/store_reader.h"
 
 namespace pnp::integration {
@@ -510,7 +511,7 @@ TEST(StoreFault, AStoreThatCannotGrowFailsTheRunAndTheServiceReportsNotServing) 
   ChildProcess server("train",
                       {"/bin/bash", "-c",
                        "trap '' XFSZ; ulimit -f 300; exec \"$0\" --role approach --address "
-                       "127.0.0.1:0 --threads 1 --db \"$1\"",
+                       "127.0.0.1:0 --metrics-address 127.0.0.1:0 --threads 1 --db \"$1\"",
                        PNP_BIN_DIR "/pnp-train-server", db},
                       dir.path());
   ASSERT_GT(server.port(), 0) << server.diagnostics();
@@ -549,6 +550,19 @@ TEST(StoreFault, AStoreThatCannotGrowFailsTheRunAndTheServiceReportsNotServing) 
       << server.diagnostics();
   EXPECT_NE(server.stderr_text().find("\"store_unwritable\""), std::string::npos);
   EXPECT_TRUE(server.running());
+  // What an alert on store write errors reads (deploy/monitoring/alerts.yml).
+  const int port = metrics_port(server);
+  ASSERT_GT(port, 0) << server.diagnostics();
+  std::string exposition;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        exposition = http_get(port, "/metrics");
+        return metric_sum(exposition, "pnp_store_fault", {"role=\"approach\""}) == 1.0;
+      },
+      kGuard, 100ms))
+      << exposition;
+  EXPECT_GE(metric_sum(exposition, "pnp_store_write_errors_total", {"role=\"approach\""}), 1.0)
+      << exposition;
   const StoreReader store(db);
   EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
   // Every evaluation that made it has its checkpoint and every checkpoint its evaluation:

@@ -127,8 +127,9 @@ class PolicyServiceTest : public ::testing::Test {
         store_->promote(store_checkpoint("hlc", choreographer_blob(seed))).checkpoint_id);
   }
 
-  void start(serving::PolicyKind kind = serving::PolicyKind::kHierarchy) {
-    service_ = std::make_unique<PolicyServiceImpl>(db_, kind);
+  void start(serving::PolicyKind kind = serving::PolicyKind::kHierarchy,
+             MetricsRegistry* metrics = nullptr) {
+    service_ = std::make_unique<PolicyServiceImpl>(db_, kind, nullptr, metrics);
     runtime_ = std::make_unique<ServerRuntime>(
         ServerConfig{"127.0.0.1:0", 1 << 20, {service_.get()}, {"pnp.policy.v1.PolicyService"}});
     stub_ = pv1::PolicyService::NewStub(grpc::CreateChannel(
@@ -304,6 +305,31 @@ TEST_F(PolicyServiceTest, ASessionKeepsItsHierarchyWhileANewPromotionServesNewRe
   pv1::PredictResponse response;
   ASSERT_TRUE(stub_->Predict(&context, valid_request(), &response).ok());
   EXPECT_EQ(response.choreographer_checkpoint_id(), new_hlc);
+}
+
+// Each session answer's time in the server is observed once (the session's RPC duration is
+// the whole episode's, which says nothing about a step's latency).
+TEST_F(PolicyServiceTest, EverySessionAnswerIsTimedInTheServer) {
+  promote_all(1);
+  MetricsRegistry metrics;
+  start(serving::PolicyKind::kHierarchy, &metrics);
+  grpc::ClientContext session_context;
+  auto session = stub_->PredictSession(&session_context);
+  const auto r = valid_request();
+  pv1::PredictSessionRequest step;
+  *step.mutable_observation() = r.observation();
+  *step.mutable_goal() = r.goal();
+  pv1::PredictSessionResponse answer;
+  for (int t = 0; t < 3; ++t) {
+    ASSERT_TRUE(session->Write(step));
+    ASSERT_TRUE(session->Read(&answer));
+  }
+  session->WritesDone();
+  ASSERT_TRUE(session->Finish().ok());
+  const std::string text = metrics.render();
+  EXPECT_NE(text.find("\npnp_inference_session_step_seconds_count 3\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("pnp_inference_session_step_seconds_bucket{le=\"0.002\"}"),
+            std::string::npos);
 }
 
 // A hierarchy promoted in one call is served whole; two checkpoints of one role are

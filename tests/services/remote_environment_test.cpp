@@ -33,7 +33,7 @@ class SimServer {
   double env_steps() {
     return metrics_
         .counter("pnp_env_steps_total", "Environment steps executed (Step and StreamRollout).")
-        .value();
+        .Value();
   }
   void stop() {
     if (!stopped_) runtime_.shutdown(milliseconds(100));
