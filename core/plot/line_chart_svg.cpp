@@ -7,34 +7,9 @@
 #include <cmath>
 #include <set>
 
+#include "plot/xml_escape.h"
+
 namespace pnp::plot {
-namespace {
-
-// Text from labels goes into XML: escape what would break it.
-std::string escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 std::string palette_colour(std::size_t i) {
   static constexpr std::array<const char*, 8> kColours{"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
@@ -82,11 +57,11 @@ std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& ser
       "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='black'/>\n"
       "<text x='{}' y='{}' text-anchor='middle'>{}</text>\n"
       "<text x='15' y='{}' transform='rotate(-90 15 {})' text-anchor='middle'>{}</text>\n",
-      W, H, L, H - B, W - R, H - B, L, T, L, H - B, (L + W - R) / 2, H - 12, escape(spec.x_label),
-      (T + H - B) / 2, (T + H - B) / 2, escape(spec.y_label));
+      W, H, L, H - B, W - R, H - B, L, T, L, H - B, (L + W - R) / 2, H - 12,
+      escape_xml(spec.x_label), (T + H - B) / 2, (T + H - B) / 2, escape_xml(spec.y_label));
   if (!spec.title.empty()) {
     svg += fmt::format("<text x='{}' y='22' text-anchor='middle' font-size='15'>{}</text>\n", W / 2,
-                       escape(spec.title));
+                       escape_xml(spec.title));
   }
   for (double g : spec.y_grid) {
     svg += fmt::format(
@@ -126,7 +101,7 @@ std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& ser
     svg += fmt::format(
         "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/><text x='{}' "
         "y='{}'>{}</text>\n",
-        W - 260, ly, W - 235, ly, s->colour, W - 228, ly + 4, escape(s->label));
+        W - 260, ly, W - 235, ly, s->colour, W - 228, ly + 4, escape_xml(s->label));
     ly += 18;
   }
   return svg + "</svg>\n";

@@ -1,0 +1,185 @@
+#include "clients/dashboard/dashboard_server.h"
+
+#include <charconv>
+#include <filesystem>
+
+#include "clients/dashboard/pages.h"
+#include "common/error.h"
+#include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "services/common/address.h"
+#include "services/common/transport_security.h"
+
+namespace pnp::dashboard {
+namespace {
+
+constexpr std::uint64_t kHeldOutSeed = 424242;  // pnpctl evaluate's: no training run uses it
+constexpr int kDefaultEpisodes = 5;
+constexpr int kRunsListed = 200;
+
+store::RunStore open_read_only(const std::string& db) {
+  if (db.empty()) throw_invalid_argument("--db", "the platform's store file", "none");
+  if (!std::filesystem::exists(db))
+    throw Error(ErrorCode::kFailedPrecondition, "--db: no store at " + db);
+  return store::RunStore(db, {.access = store::Access::kReadOnly});
+}
+
+int http_status(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::kInvalidArgument:
+      return 400;
+    case ErrorCode::kNotFound:
+      return 404;
+    case ErrorCode::kFailedPrecondition:
+      return 409;
+    case ErrorCode::kUnavailable:
+      return 503;
+    default:
+      return 500;
+  }
+}
+
+// A query parameter as an integer in [lo, hi]; INVALID_ARGUMENT naming it otherwise.
+long long integer_param(const httplib::Request& request, const std::string& name,
+                        long long fallback, long long lo, long long hi) {
+  if (!request.has_param(name)) return fallback;
+  const std::string text = request.get_param_value(name);
+  long long value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || value < lo || value > hi)
+    throw_invalid_argument(name,
+                           "an integer from " + std::to_string(lo) + " to " + std::to_string(hi),
+                           "\"" + text + "\"");
+  return value;
+}
+
+std::int64_t run_id_of(const httplib::Request& request) {
+  std::int64_t id = 0;
+  const std::string text = request.matches[1];
+  std::from_chars(text.data(), text.data() + text.size(), id);
+  return id;
+}
+
+store::RunFilter recent_runs() {
+  store::RunFilter filter;
+  filter.limit = kRunsListed;
+  return filter;
+}
+
+ServingView serving_view(const std::shared_ptr<grpc::Channel>& inference) {
+  ServingView view;
+  auto stub = policy::v1::PolicyService::NewStub(inference);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  policy::v1::GetServingStatusResponse status;
+  const grpc::Status rpc = stub->GetServingStatus(&context, {}, &status);
+  if (!rpc.ok()) {
+    view.error = rpc.error_message();
+    return view;
+  }
+  view.ready = status.ready();
+  return view;
+}
+
+// Runs `body`, turning a pnp::Error (or anything else) into a page with its status.
+template <typename Body>
+void answer(httplib::Response& response, Body&& body) {
+  try {
+    body();
+  } catch (const Error& e) {
+    response.status = http_status(e.code());
+    response.set_content(error_page(response.status, e.what()), "text/html; charset=utf-8");
+  } catch (const std::exception& e) {
+    response.status = 500;
+    response.set_content(error_page(500, e.what()), "text/html; charset=utf-8");
+  }
+}
+
+}  // namespace
+
+DashboardServer::DashboardServer(DashboardConfig config)
+    : config_(std::move(config)),
+      store_(open_read_only(config_.db)),
+      player_(config_.sim, config_.inference) {
+  services::validate_address(config_.address, "--address");
+  if (!services::is_loopback_address(config_.address))
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--address " + config_.address +
+                    ": the dashboard serves plaintext HTTP without authentication, so on "
+                    "loopback only; reach it through an SSH tunnel or a TLS reverse proxy");
+  routes();
+  const auto colon = config_.address.rfind(':');
+  std::string host = config_.address.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  const int wanted = std::stoi(config_.address.substr(colon + 1));
+  port_ =
+      wanted == 0 ? http_.bind_to_any_port(host) : (http_.bind_to_port(host, wanted) ? wanted : -1);
+  if (port_ <= 0)
+    throw Error(ErrorCode::kUnavailable, "--address " + config_.address + ": cannot listen: " +
+                                             services::listen_failure_reason(config_.address));
+  thread_ = std::jthread([this] { http_.listen_after_bind(); });
+}
+
+DashboardServer::~DashboardServer() {
+  http_.stop();
+}
+
+void DashboardServer::routes() {
+  http_.Get("/healthz", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content("ok\n", "text/plain");
+  });
+  http_.Get("/", [this](const httplib::Request&, httplib::Response& response) {
+    answer(response, [&] {
+      std::vector<store::RunRecord> runs;
+      std::vector<store::Promotion> promotions;
+      {
+        std::lock_guard lock(store_mutex_);
+        runs = store_.list_runs(recent_runs());
+        promotions = store_.promotions();
+      }
+      ServingView serving = serving_view(config_.inference);
+      if (serving.ready) {
+        try {
+          const ServedWorld w = player_.served_world();
+          serving.world = w.world + "/" + w.robot + "/" + w.object;
+        } catch (const Error&) {  // the page still shows what the store says
+        }
+      }
+      response.set_content(overview_page(runs, promotions, serving), "text/html; charset=utf-8");
+    });
+  });
+  http_.Get(R"(/runs/(\d+))", [this](const httplib::Request& request, httplib::Response& response) {
+    answer(response, [&] {
+      std::lock_guard lock(store_mutex_);
+      const auto run = store_.get_run(run_id_of(request));
+      response.set_content(run_page(run, store_.checkpoints(run.id)), "text/html; charset=utf-8");
+    });
+  });
+  http_.Get("/api/runs", [this](const httplib::Request&, httplib::Response& response) {
+    answer(response, [&] {
+      nlohmann::json out = nlohmann::json::array();
+      std::lock_guard lock(store_mutex_);
+      for (const auto& run : store_.list_runs(recent_runs())) out.push_back(run_json(run, {}));
+      response.set_content(out.dump(), "application/json");
+    });
+  });
+  http_.Get(
+      R"(/api/runs/(\d+))", [this](const httplib::Request& request, httplib::Response& response) {
+        answer(response, [&] {
+          std::lock_guard lock(store_mutex_);
+          const auto run = store_.get_run(run_id_of(request));
+          response.set_content(run_json(run, store_.metrics(run.id)).dump(), "application/json");
+        });
+      });
+  http_.Get("/episodes", [this](const httplib::Request& request, httplib::Response& response) {
+    answer(response, [&] {
+      const auto count =
+          integer_param(request, "count", kDefaultEpisodes, 1, EpisodePlayer::kMaxEpisodes);
+      const auto seed = integer_param(request, "seed", kHeldOutSeed, 0, 1LL << 62);
+      const PlayedEpisodes played =
+          player_.play(static_cast<int>(count), static_cast<std::uint64_t>(seed));
+      response.set_content(episodes_page(played), "text/html; charset=utf-8");
+    });
+  });
+}
+
+}  // namespace pnp::dashboard

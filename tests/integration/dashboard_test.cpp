@@ -1,0 +1,162 @@
+// Integration: pnp-dashboard over a real store, inference and simulation service, loaded
+// in a real browser (Debian's headless Chromium): the DOM after the pages' scripts ran
+// lists the runs, draws a run's curve from the live JSON with exactly its points, and
+// draws played episodes; a screenshot of each page is saved beside the test's logs.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "store/checkpoint_import.h"
+#include "store/run_store.h"
+#include "tests/integration/child_process.h"
+#include "tests/integration/metrics_scrape.h"
+
+namespace pnp::integration {
+namespace {
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+store::MetricPoint point(long long steps, double success) {
+  store::MetricPoint p;
+  p.env_steps = steps;
+  p.episodes = steps / 50;
+  p.wall_s = static_cast<double>(steps) / 500;
+  p.task_success = success;
+  p.subtask_success = success;
+  p.stop_score = success;
+  return p;
+}
+
+class Dashboard : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    {
+      store::RunStore store(db_);
+      store::import_hierarchy(store, PNP_SOURCE_DIR "/tests/data/panda_block", "panda", "block");
+      // A run still training, with three evaluations so far.
+      training_run_ =
+          store.create_run({"approach", "ddpg_her", "panda", "block", 7, "{}", "", std::nullopt})
+              .id;
+      store.set_state(training_run_, store::RunState::kRunning);
+      for (const auto& [steps, success] : {std::pair{1000LL, 0.4}, {2000LL, 0.8}, {3000LL, 0.9}})
+        store.record_metric(training_run_, point(steps, success), false, std::nullopt);
+    }
+    ASSERT_GT(sim_.port(), 0) << sim_.diagnostics();
+    ASSERT_GT(inference_.port(), 0) << inference_.diagnostics();
+    dashboard_.emplace(
+        "dashboard",
+        std::vector<std::string>{PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db",
+                                 db_, "--sim", loopback(sim_.port()), "--inference",
+                                 loopback(inference_.port())},
+        dir_.path());
+    port_ = dashboard_->port();
+    ASSERT_GT(port_, 0) << dashboard_->diagnostics();
+  }
+
+  std::string url(const std::string& path) const {
+    return "http://127.0.0.1:" + std::to_string(port_) + path;
+  }
+
+  // The page's DOM once its scripts have run (virtual time: the polls happen at once),
+  // and a screenshot of it saved as NAME.png in the test's directory.
+  std::string browse(const std::string& path, const std::string& name) {
+    const std::vector<std::string> common{PNP_CHROMIUM,        "--headless",
+                                          "--no-sandbox",      "--disable-gpu",
+                                          "--hide-scrollbars", "--virtual-time-budget=5000"};
+    auto with = [&](std::vector<std::string> extra) {
+      std::vector<std::string> args = common;
+      args.insert(args.end(), extra.begin(), extra.end());
+      return args;
+    };
+    ChildProcess dump(name + "_dom", with({"--dump-dom", url(path)}), dir_.path());
+    const auto dumped = dump.wait(120s);
+    EXPECT_TRUE(dumped && dumped->ok()) << dump.diagnostics();
+    ChildProcess shot(name + "_png",
+                      with({"--window-size=1280,1000",
+                            "--screenshot=" + (dir_.path() / (name + ".png")).string(), url(path)}),
+                      dir_.path());
+    const auto shot_done = shot.wait(120s);
+    EXPECT_TRUE(shot_done && shot_done->ok()) << shot.diagnostics();
+    EXPECT_TRUE(std::filesystem::file_size(dir_.path() / (name + ".png")) > 10'000);
+    return dump.stdout_text();
+  }
+
+  TempDir dir_{"dashboard"};
+  const std::string db_ = dir_.file("pnp.db");
+  ChildProcess sim_{
+      "sim", {PNP_BIN_DIR "/pnp-sim-server", "--address", "127.0.0.1:0"}, dir_.path()};
+  ChildProcess inference_{
+      "inference",
+      {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db", db_, "--create-db"},
+      dir_.path()};
+  std::optional<ChildProcess> dashboard_;
+  int port_ = 0;
+  std::int64_t training_run_ = 0;
+};
+
+TEST_F(Dashboard, TheOverviewListsEveryRunAndWhatIsServed) {
+  const std::string dom = browse("/", "overview");
+  EXPECT_EQ(count(dom, "<tr class=\"run\""), 5) << dom;
+  EXPECT_NE(dom.find("data-run=\"" + std::to_string(training_run_) + "\""), std::string::npos);
+  EXPECT_NE(dom.find("<p id=\"serving\" data-ready=\"1\">"), std::string::npos) << dom;
+  EXPECT_EQ(count(dom, "<tr><td>approach</td>"), 1) << "the promotions table";
+}
+
+TEST_F(Dashboard, ARunsCurveIsDrawnByItsScriptFromTheLiveJson) {
+  // The server's page carries no curve: what the browser shows was drawn by the page's
+  // polling script from /api/runs/ID, the same code that redraws as evaluations arrive.
+  const std::string served = http_get(port_, "/runs/" + std::to_string(training_run_));
+  EXPECT_NE(served.find("<div id=\"curve\" data-points=\"0\">"), std::string::npos) << served;
+  const std::string dom = browse("/runs/" + std::to_string(training_run_), "run");
+  EXPECT_NE(dom.find("<div id=\"curve\" data-points=\"3\">"), std::string::npos) << dom;
+  EXPECT_NE(dom.find("class=\"series task_success\" data-points=\"3\""), std::string::npos);
+  EXPECT_NE(dom.find("id=\"state\">running<"), std::string::npos);
+  // A new evaluation is in the JSON the script polls.
+  {
+    store::RunStore store(db_);
+    store.record_metric(training_run_, point(4000, 0.97), true, 4000);
+  }
+  const std::string json = http_get(port_, "/api/runs/" + std::to_string(training_run_));
+  EXPECT_EQ(count(json, "\"env_steps\":"), 5) << json << " (the run's and four points)";
+}
+
+TEST_F(Dashboard, EpisodesOfTheServedHierarchyAreDrawn) {
+  const std::string dom = browse("/episodes?count=2&seed=880000", "episodes");
+  EXPECT_NE(dom.find("data-episodes=\"2\""), std::string::npos) << dom;
+  EXPECT_EQ(count(dom, "class=\"episode\" data-steps=\"50\""), 2) << dom;
+  EXPECT_GT(count(dom, "class=\"gripper subtask-approach\""), 0);
+  EXPECT_NE(dom.find("(paper/panda/block, seed 880000)"), std::string::npos) << dom;
+}
+
+TEST_F(Dashboard, BadRequestsAreRefusedNamingTheParameter) {
+  const std::string bad = http_get(port_, "/episodes?count=500");
+  EXPECT_TRUE(bad.starts_with("HTTP/1.1 400")) << bad;
+  EXPECT_NE(bad.find("count: expected an integer from 1 to 20, got &quot;500&quot;"),
+            std::string::npos)
+      << bad;
+  EXPECT_TRUE(http_get(port_, "/runs/999999").starts_with("HTTP/1.1 404"));
+  EXPECT_TRUE(http_get(port_, "/healthz").starts_with("HTTP/1.1 200"));
+}
+
+TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
+  TempDir dir("dashboard_refusals");
+  // Starts the dashboard on `db`; expects exit code 1 and returns what it said.
+  const auto refusal = [&](const std::string& name, const std::string& db) {
+    ChildProcess dashboard(
+        name, {PNP_BIN_DIR "/pnp-dashboard", "--address", "0.0.0.0:0", "--db", db}, dir.path());
+    const auto status = dashboard.wait(30s);
+    EXPECT_TRUE(status && status->exited && status->code == 1) << dashboard.diagnostics();
+    return dashboard.stderr_text();
+  };
+  EXPECT_NE(refusal("missing", dir.file("missing.db")).find("no store at"), std::string::npos);
+  { store::RunStore store(dir.file("pnp.db")); }
+  EXPECT_NE(refusal("exposed", dir.file("pnp.db")).find("loopback only"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pnp::integration
