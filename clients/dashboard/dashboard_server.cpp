@@ -94,40 +94,65 @@ void answer(httplib::Response& response, Body&& body) {
   }
 }
 
+std::unique_ptr<httplib::Server> make_http(const DashboardConfig& config) {
+  if (config.tls_cert.empty() != config.tls_key.empty())
+    throw_invalid_argument("--tls-cert and --tls-key", "both (HTTPS) or neither", "one of them");
+  if (config.tls_cert.empty()) return std::make_unique<httplib::Server>();
+  auto server =
+      std::make_unique<httplib::SSLServer>(config.tls_cert.c_str(), config.tls_key.c_str());
+  if (!server->is_valid())
+    throw_invalid_argument("--tls-cert and --tls-key", "a readable PEM certificate and its key",
+                           config.tls_cert + ", " + config.tls_key);
+  return server;
+}
+
+// What would let strangers read the platform, or send a token in the clear, is refused.
+void check_exposure(const DashboardConfig& config) {
+  services::validate_address(config.address, "--address");
+  const bool tls = !config.tls_cert.empty();
+  if (config.policy && !tls)
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--auth-policy needs --tls-cert and --tls-key: tokens are never taken over "
+                "plaintext");
+  if (!tls && !services::is_loopback_address(config.address))
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--address " + config.address +
+                    ": plaintext HTTP is for loopback only; give --tls-cert and --tls-key (and "
+                    "--auth-policy: readers only), or reach it through an SSH tunnel");
+}
+
 }  // namespace
 
 DashboardServer::DashboardServer(DashboardConfig config)
     : config_(std::move(config)),
+      access_(config_.policy),
       store_(open_read_only(config_.db)),
       player_(config_.sim, config_.inference) {
-  services::validate_address(config_.address, "--address");
-  if (!services::is_loopback_address(config_.address))
-    throw Error(ErrorCode::kFailedPrecondition,
-                "--address " + config_.address +
-                    ": the dashboard serves plaintext HTTP without authentication, so on "
-                    "loopback only; reach it through an SSH tunnel or a TLS reverse proxy");
+  check_exposure(config_);
+  http_ = make_http(config_);
   routes();
   const auto colon = config_.address.rfind(':');
   std::string host = config_.address.substr(0, colon);
   if (host.size() >= 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
   const int wanted = std::stoi(config_.address.substr(colon + 1));
-  port_ =
-      wanted == 0 ? http_.bind_to_any_port(host) : (http_.bind_to_port(host, wanted) ? wanted : -1);
+  port_ = wanted == 0 ? http_->bind_to_any_port(host)
+                      : (http_->bind_to_port(host, wanted) ? wanted : -1);
   if (port_ <= 0)
     throw Error(ErrorCode::kUnavailable, "--address " + config_.address + ": cannot listen: " +
                                              services::listen_failure_reason(config_.address));
-  thread_ = std::jthread([this] { http_.listen_after_bind(); });
+  thread_ = std::jthread([this] { http_->listen_after_bind(); });
 }
 
 DashboardServer::~DashboardServer() {
-  http_.stop();
+  http_->stop();
 }
 
 void DashboardServer::routes() {
-  http_.Get("/healthz", [](const httplib::Request&, httplib::Response& response) {
+  if (access_.enforced()) login_routes();
+  http_->Get("/healthz", [](const httplib::Request&, httplib::Response& response) {
     response.set_content("ok\n", "text/plain");
   });
-  http_.Get("/", [this](const httplib::Request&, httplib::Response& response) {
+  http_->Get("/", [this](const httplib::Request&, httplib::Response& response) {
     answer(response, [&] {
       std::vector<store::RunRecord> runs;
       std::vector<store::Promotion> promotions;
@@ -147,14 +172,15 @@ void DashboardServer::routes() {
       response.set_content(overview_page(runs, promotions, serving), "text/html; charset=utf-8");
     });
   });
-  http_.Get(R"(/runs/(\d+))", [this](const httplib::Request& request, httplib::Response& response) {
+  http_->Get(R"(/runs/(\d+))", [this](const httplib::Request& request,
+                                      httplib::Response& response) {
     answer(response, [&] {
       std::lock_guard lock(store_mutex_);
       const auto run = store_.get_run(run_id_of(request));
       response.set_content(run_page(run, store_.checkpoints(run.id)), "text/html; charset=utf-8");
     });
   });
-  http_.Get("/api/runs", [this](const httplib::Request&, httplib::Response& response) {
+  http_->Get("/api/runs", [this](const httplib::Request&, httplib::Response& response) {
     answer(response, [&] {
       nlohmann::json out = nlohmann::json::array();
       std::lock_guard lock(store_mutex_);
@@ -162,7 +188,7 @@ void DashboardServer::routes() {
       response.set_content(out.dump(), "application/json");
     });
   });
-  http_.Get(
+  http_->Get(
       R"(/api/runs/(\d+))", [this](const httplib::Request& request, httplib::Response& response) {
         answer(response, [&] {
           std::lock_guard lock(store_mutex_);
@@ -170,7 +196,7 @@ void DashboardServer::routes() {
           response.set_content(run_json(run, store_.metrics(run.id)).dump(), "application/json");
         });
       });
-  http_.Get("/episodes", [this](const httplib::Request& request, httplib::Response& response) {
+  http_->Get("/episodes", [this](const httplib::Request& request, httplib::Response& response) {
     answer(response, [&] {
       const auto count =
           integer_param(request, "count", kDefaultEpisodes, 1, EpisodePlayer::kMaxEpisodes);
@@ -179,6 +205,41 @@ void DashboardServer::routes() {
           player_.play(static_cast<int>(count), static_cast<std::uint64_t>(seed));
       response.set_content(episodes_page(played), "text/html; charset=utf-8");
     });
+  });
+}
+
+void DashboardServer::login_routes() {
+  // Every request but /login and /healthz needs a reader.
+  http_->set_pre_routing_handler(
+      [this](const httplib::Request& request, httplib::Response& response) {
+        if (request.path == "/login" || request.path == "/healthz")
+          return httplib::Server::HandlerResponse::Unhandled;
+        const auto decision = access_.decide(request);
+        if (decision.outcome == security::AccessDecision::Outcome::kAllowed)
+          return httplib::Server::HandlerResponse::Unhandled;
+        const bool unauthenticated =
+            decision.outcome == security::AccessDecision::Outcome::kUnauthenticated;
+        response.status = unauthenticated ? 401 : 403;
+        response.set_content(access_page(response.status, decision.message),
+                             "text/html; charset=utf-8");
+        return httplib::Server::HandlerResponse::Handled;
+      });
+  http_->Get("/login", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content(login_page(""), "text/html; charset=utf-8");
+  });
+  http_->Post("/login", [this](const httplib::Request& request, httplib::Response& response) {
+    const std::string token = request.get_param_value("token");
+    if (!is_cookie_safe(token) || !access_.is_reader_token(token)) {
+      response.status = 401;
+      response.set_content(login_page("that token is not a reader's in this dashboard's policy"),
+                           "text/html; charset=utf-8");
+      return;
+    }
+    // HttpOnly: no script reads it; Secure: HTTPS only (a policy needs TLS); Strict: never
+    // sent from another site's page.
+    response.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + token +
+                                          "; HttpOnly; Secure; SameSite=Strict; Path=/");
+    response.set_redirect("/", 303);
   });
 }
 

@@ -6,6 +6,7 @@
 //   /episodes         ?count=N&seed=S: held-out episodes of the served hierarchy, drawn
 //   /api/runs, /api/runs/ID   the same as JSON
 //   /healthz
+//   /login            (with an authorization policy) a reader's token, kept as a cookie
 // Every handler answers with a status and a message naming the problem; none throws.
 
 #include <httplib.h>
@@ -15,21 +16,25 @@
 #include <string>
 #include <thread>
 
+#include "clients/dashboard/dashboard_access.h"
 #include "clients/dashboard/episode_player.h"
 #include "store/run_store.h"
 
 namespace pnp::dashboard {
 
 struct DashboardConfig {
-  std::string address = "127.0.0.1:8080";  // loopback only (plaintext, no authentication)
+  std::string address = "127.0.0.1:8080";  // beyond loopback only with TLS
   std::string db;
   std::shared_ptr<grpc::Channel> sim, inference;
+  std::string tls_cert, tls_key;                       // both: HTTPS
+  std::shared_ptr<const security::AuthPolicy> policy;  // set: readers only (needs TLS)
 };
 
 class DashboardServer {
  public:
   // Opens the store read-only (it must exist) and listens; INVALID_ARGUMENT or
-  // FAILED_PRECONDITION naming the flag, UNAVAILABLE if it cannot listen.
+  // FAILED_PRECONDITION naming the flag (plaintext beyond loopback, a policy without
+  // TLS, unreadable certificates), UNAVAILABLE if it cannot listen.
   explicit DashboardServer(DashboardConfig config);
   ~DashboardServer();  // stops listening and joins the server thread
   DashboardServer(const DashboardServer&) = delete;
@@ -39,12 +44,14 @@ class DashboardServer {
 
  private:
   void routes();
+  void login_routes();
 
   DashboardConfig config_;
+  DashboardAccess access_;
   std::mutex store_mutex_;  // one connection, used by one handler at a time
   store::RunStore store_;
   EpisodePlayer player_;
-  httplib::Server http_;
+  std::unique_ptr<httplib::Server> http_;  // an httplib::SSLServer with TLS
   int port_ = 0;
   std::jthread thread_;  // last: joined before the rest goes
 };

@@ -8,6 +8,7 @@
 
 #include "clients/dashboard/dashboard_server.h"
 #include "common/error.h"
+#include "security/auth_policy.h"
 #include "services/common/address.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
@@ -20,8 +21,17 @@ int main(int argc, char** argv) {
   dashboard::DashboardConfig config;
   std::string sim = "127.0.0.1:50051", inference = "127.0.0.1:50060";
   app.add_option("--address", config.address,
-                 "host:port for HTTP, loopback only (port 0 picks a free one)")
+                 "host:port to listen on (port 0 picks a free one); beyond loopback only "
+                 "with --tls-cert and --tls-key")
       ->capture_default_str();
+  std::string auth_policy;
+  app.add_option("--tls-cert", config.tls_cert, "PEM certificate chain: serve HTTPS")
+      ->envname("PNP_SERVER_TLS_CERT");
+  app.add_option("--tls-key", config.tls_key, "PEM private key of --tls-cert")
+      ->envname("PNP_SERVER_TLS_KEY");
+  app.add_option("--auth-policy", auth_policy,
+                 "the platform's authorization policy: readers only (needs TLS)")
+      ->envname("PNP_AUTH_POLICY");
   app.add_option("--db", config.db, "the platform's SQLite store (read only) [$PNP_DB]")
       ->envname("PNP_DB");
   app.add_option("--sim", sim, "simulation service, for the episode viewer")
@@ -30,19 +40,28 @@ int main(int argc, char** argv) {
   app.add_option("--inference", inference, "inference service")
       ->envname("PNP_INFERENCE_ADDRESS")
       ->capture_default_str();
-  services::ClientTlsFiles tls;  // the services' credentials: a reader's token is enough
-  services::add_client_security_flags(app, tls);
+  // The services' credentials: --platform-tls-ca, --platform-token-file, ... (the
+  // episode viewer steps a simulation and asks for actions: an agent's token).
+  services::ClientTlsFiles tls;
+  services::add_client_security_flags(app, tls, "platform-");
   CLI11_PARSE(app, argc, argv);
   try {
     services::validate_address(sim, "--sim");
     services::validate_address(inference, "--inference");
+    if (!auth_policy.empty())
+      config.policy =
+          std::make_shared<const security::AuthPolicy>(security::AuthPolicy::load(auth_policy));
     config.sim = services::dial(sim, tls);
     config.inference = services::dial(inference, tls);
     const dashboard::DashboardServer server(config);
     std::printf("%d\n", server.port());
     std::fflush(stdout);
-    services::log_event("dashboard", "listening",
-                        {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"}});
+    const auto colon = config.address.rfind(':');
+    services::log_event(
+        "dashboard", "listening",
+        {{"url", std::string(config.tls_cert.empty() ? "http" : "https") + "://" +
+                     config.address.substr(0, colon) + ":" + std::to_string(server.port()) + "/"},
+         {"readers_only", config.policy != nullptr}});
     services::wait_for_termination_signal();
     return 0;
   } catch (const Error& e) {

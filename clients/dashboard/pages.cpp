@@ -130,6 +130,25 @@ std::string error_page(int status, const std::string& message) {
               "<p class=\"bad\" id=\"error\">" + escape_xml(message) + "</p>\n");
 }
 
+std::string access_page(int status, const std::string& message) {
+  return page(status == 401 ? "Sign in" : "Not allowed",
+              "<p class=\"bad\" id=\"error\">" + escape_xml(message) +
+                  "</p>\n<p>This dashboard shows the platform to readers (the platform's "
+                  "authorization policy): <a href=\"/login\">sign in with a reader's "
+                  "token</a>.</p>\n");
+}
+
+std::string login_page(const std::string& error) {
+  std::string body;
+  if (!error.empty()) body += "<p class=\"bad\" id=\"error\">" + escape_xml(error) + "</p>\n";
+  body +=
+      "<form method=\"post\" action=\"/login\"><label>reader's token <input "
+      "type=\"password\" name=\"token\" size=\"66\" autocomplete=\"off\"></label> "
+      "<button>sign in</button></form>\n<p>The token is kept in an HttpOnly cookie for this "
+      "site only; the platform's policy stores its SHA-256.</p>\n";
+  return page("Sign in", body);
+}
+
 nlohmann::json run_json(const store::RunRecord& run,
                         const std::vector<store::MetricPoint>& metrics) {
   nlohmann::json points = nlohmann::json::array();

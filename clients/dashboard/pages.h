@@ -29,6 +29,9 @@ std::string run_page(const store::RunRecord& run,
                      const std::vector<store::CheckpointInfo>& checkpoints);
 std::string episodes_page(const PlayedEpisodes& played);
 std::string error_page(int status, const std::string& message);
+// 401/403 with what is needed and a link to /login; the login form with an error, if any.
+std::string access_page(int status, const std::string& message);
+std::string login_page(const std::string& error);
 
 // /api/runs/ID: the run's state and every evaluation, what the curve script draws.
 nlohmann::json run_json(const store::RunRecord& run,

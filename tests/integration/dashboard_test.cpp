@@ -3,7 +3,9 @@
 // lists the runs, draws a run's curve from the live JSON with exactly its points, and
 // draws played episodes; a screenshot of each page is saved beside the test's logs.
 #include <gtest/gtest.h>
+#include <httplib.h>
 
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -143,6 +145,53 @@ TEST_F(Dashboard, BadRequestsAreRefusedNamingTheParameter) {
   EXPECT_TRUE(http_get(port_, "/healthz").starts_with("HTTP/1.1 200"));
 }
 
+// With the platform's certificates and policy (scripts/make-dev-certs): HTTPS, and only a
+// reader's token, sent as a bearer header or as the cookie /login sets, opens a page.
+TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
+  TempDir dir("dashboard_secured");
+  const std::string certs = dir.file("certs");
+  ASSERT_EQ(std::system((std::string(PNP_SOURCE_DIR) + "/scripts/make-dev-certs --out " + certs +
+                         " 2>/dev/null")
+                            .c_str()),
+            0);
+  { store::RunStore store(dir.file("pnp.db")); }
+  ChildProcess dashboard("dashboard",
+                         {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db",
+                          dir.file("pnp.db"), "--tls-cert", certs + "/server.pem", "--tls-key",
+                          certs + "/server.key", "--auth-policy", certs + "/policy.json"},
+                         dir.path());
+  const int port = dashboard.port();
+  ASSERT_GT(port, 0) << dashboard.diagnostics();
+  httplib::SSLClient https("127.0.0.1", port);
+  https.set_ca_cert_path((certs + "/ca.pem").c_str());
+  https.enable_server_certificate_verification(true);
+  const auto status = [&](const std::string& path, const httplib::Headers& headers) {
+    const auto answer = https.Get(path.c_str(), headers);
+    return answer ? answer->status : -1;
+  };
+  const std::string reader = read_file(certs + "/reader.token");
+  const std::string token = reader.substr(0, reader.find('\n'));
+  EXPECT_EQ(status("/", {}), 401);
+  EXPECT_EQ(status("/api/runs", {{"Authorization", "Bearer not-a-token"}}), 401);
+  EXPECT_EQ(status("/", {{"Authorization", "Bearer " + token}}), 200);
+  EXPECT_EQ(status("/api/runs", {{"Cookie", "pnp_token=" + token}}), 200);
+  EXPECT_EQ(status("/healthz", {}), 200);
+  // /login checks the token before it sets the cookie, which is for HTTPS and this site only.
+  const auto wrong = https.Post("/login", "token=0123", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(wrong);
+  EXPECT_EQ(wrong->status, 401);
+  EXPECT_FALSE(wrong->has_header("Set-Cookie"));
+  const auto signed_in =
+      https.Post("/login", "token=" + token, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(signed_in);
+  EXPECT_EQ(signed_in->status, 303);
+  EXPECT_EQ(signed_in->get_header_value("Set-Cookie"),
+            "pnp_token=" + token + "; HttpOnly; Secure; SameSite=Strict; Path=/");
+  // Plaintext to the HTTPS port gets nothing.
+  EXPECT_TRUE(http_get(port, "/").find("200 OK") == std::string::npos);
+  EXPECT_EQ(dashboard.stderr_text().find(token), std::string::npos) << "a token was logged";
+}
+
 TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
   TempDir dir("dashboard_refusals");
   // Starts the dashboard on `db`; expects exit code 1 and returns what it said.
@@ -155,7 +204,8 @@ TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
   };
   EXPECT_NE(refusal("missing", dir.file("missing.db")).find("no store at"), std::string::npos);
   { store::RunStore store(dir.file("pnp.db")); }
-  EXPECT_NE(refusal("exposed", dir.file("pnp.db")).find("loopback only"), std::string::npos);
+  EXPECT_NE(refusal("exposed", dir.file("pnp.db")).find("plaintext HTTP is for loopback only"),
+            std::string::npos);
 }
 
 }  // namespace
