@@ -90,7 +90,8 @@ std::string run_page(const store::RunRecord& run,
                      const std::vector<store::CheckpointInfo>& checkpoints) {
   std::string body = fmt::format(
       "<p id=\"run-state\" data-run=\"{}\">{} {} on {} / {}, seed {}: <b "
-      "id=\"state\">{}</b>, <span id=\"steps\">{}</span> training steps</p>\n"
+      "id=\"state\">{}</b>, <span id=\"steps\">{}</span> training steps, <span "
+      "id=\"wall\">&#8212;</span> of training</p>\n"
       "<div id=\"curve\" data-points=\"0\">loading the learning curve&#8230;</div>\n",
       run.id, escape_xml(run.spec.role), escape_xml(run.spec.algorithm), escape_xml(run.spec.robot),
       escape_xml(run.spec.object), run.spec.seed, store::run_state_name(run.state), run.env_steps);
@@ -200,6 +201,7 @@ function draw(run) {{
   box.dataset.points = pts.length;
   document.getElementById('state').textContent = run.state;
   document.getElementById('steps').textContent = run.env_steps;
+  if (pts.length) document.getElementById('wall').textContent = `${{pts[pts.length - 1].wall_s.toFixed(1)}} s`;
 }}
 async function refresh() {{
   try {{

@@ -38,7 +38,8 @@ nlohmann::json run_json(const store::RunRecord& run,
                         const std::vector<store::MetricPoint>& metrics);
 
 // The run page's script: fetches /api/runs/ID every `poll_ms` and redraws the curve (task
-// success, subtask success and the stop score against training steps) and the state line.
+// success, subtask success and the stop score against training steps) and the state line
+// (state, training steps, wall time at the last evaluation).
 std::string live_curve_script(int poll_ms);
 
 }  // namespace pnp::dashboard

@@ -118,6 +118,7 @@ TEST_F(Dashboard, ARunsCurveIsDrawnByItsScriptFromTheLiveJson) {
   EXPECT_NE(dom.find("<div id=\"curve\" data-points=\"3\">"), std::string::npos) << dom;
   EXPECT_NE(dom.find("class=\"series task_success\" data-points=\"3\""), std::string::npos);
   EXPECT_NE(dom.find("id=\"state\">running<"), std::string::npos);
+  EXPECT_NE(dom.find("id=\"wall\">6.0 s<"), std::string::npos) << "the last evaluation's wall time";
   // A new evaluation is in the JSON the script polls.
   {
     store::RunStore store(db_);
