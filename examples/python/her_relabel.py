@@ -68,6 +68,9 @@ def main() -> None:
     parser.add_argument("--batch", type=int, default=4096)
     parser.add_argument("--future-p", type=float, default=0.8, help="HER's relabelled fraction")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--robot", default="fetch")
+    parser.add_argument("--object", default="block")
+    parser.add_argument("--world", default="gym")
     parser.add_argument("--sim", help="simulation service host:port (default: as pnpctl)")
     args = parser.parse_args()
     if args.episodes <= 0:
@@ -76,7 +79,8 @@ def main() -> None:
         parser.error(f"--future-p: expected a fraction in [0, 1], got {args.future_p}")
 
     rng = np.random.default_rng(args.seed)
-    with pnp.PickAndPlaceEnv(args.sim, seed=args.seed) as env:
+    with pnp.PickAndPlaceEnv(args.sim, robot=args.robot, object=args.object, world=args.world,
+                             seed=args.seed) as env:
         episodes = collect(env, args.episodes, rng)
         # The stored rewards are compute_reward's on the stored goals: a check of the API.
         stored = env.compute_reward(episodes["achieved"][:, 1:], episodes["desired"], None)
@@ -84,7 +88,8 @@ def main() -> None:
         _, relabelled = relabel(env, episodes, args.batch, args.future_p, rng)
     before = float(np.mean(episodes["rewards"] == 0))
     after = float(np.mean(relabelled == 0))
-    print(f"{args.episodes} episodes ({episodes['faults']} cut short by a physics fault, "
+    print(f"{args.world}/{args.robot}/{args.object}, {args.episodes} episodes "
+          f"({episodes['faults']} cut short by a physics fault, "
           f"left out): {before:.3f} of stored transitions reach their goal; "
           f"after relabelling {args.future_p:.0%} of a batch of {args.batch} with future "
           f"achieved goals: {after:.3f}")
