@@ -1,7 +1,9 @@
 #include "clients/dashboard/dashboard_server.h"
 
 #include <charconv>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "clients/dashboard/pages.h"
 #include "common/error.h"
@@ -15,6 +17,7 @@ namespace {
 constexpr std::uint64_t kHeldOutSeed = 424242;  // pnpctl evaluate's: no training run uses it
 constexpr int kDefaultEpisodes = 5;
 constexpr int kRunsListed = 200;
+constexpr std::size_t kMaxRequestBodyBytes = 64 * 1024;
 
 store::RunStore open_read_only(const std::string& db) {
   if (db.empty()) throw_invalid_argument("--db", "the platform's store file", "none");
@@ -130,6 +133,8 @@ DashboardServer::DashboardServer(DashboardConfig config)
       player_(config_.sim, config_.inference) {
   check_exposure(config_);
   http_ = make_http(config_);
+  // Requests are small (a login form at most): a large body is refused before it is read.
+  http_->set_payload_max_length(kMaxRequestBodyBytes);
   routes();
   const auto colon = config_.address.rfind(':');
   std::string host = config_.address.substr(0, colon);
@@ -141,6 +146,11 @@ DashboardServer::DashboardServer(DashboardConfig config)
     throw Error(ErrorCode::kUnavailable, "--address " + config_.address + ": cannot listen: " +
                                              services::listen_failure_reason(config_.address));
   thread_ = std::jthread([this] { http_->listen_after_bind(); });
+  // httplib's stop() does nothing until the listening loop has started: wait for it, so
+  // that a destructor right after the constructor cannot hang the join.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (!http_->is_running() && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
 DashboardServer::~DashboardServer() {

@@ -81,7 +81,10 @@ plot::EpisodeTrace play_one(sv1::SimulationService::Stub& sim, pv1::PolicyServic
   trace.success_radius_m = sim::layout::kTaskSuccessDistance;
   trace.table_top_z = sim::layout::kTableTop_z;
   trace.frames.push_back(frame_of(state, -1));
+  // A whole episode is 50 answers: a hung inference service frees this worker after a
+  // minute instead of holding it forever.
   grpc::ClientContext session_context;
+  session_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   auto session = policy.PredictSession(&session_context);
   for (;;) {
     pv1::PredictSessionRequest ask;
@@ -126,9 +129,11 @@ ServedWorld EpisodePlayer::served_world() {
     throw Error(ErrorCode::kFailedPrecondition,
                 "the inference service serves no hierarchy yet (promote one: pnpctl promote)");
   ServedWorld out;
+  // The choreographer's world; an end-to-end policy's when that is what is served.
   for (const auto& role : status.roles()) {
-    if (role.role() != common::v1::ROLE_HLC || role.robot() == common::v1::ROBOT_UNSPECIFIED)
-      continue;
+    const bool defines_world =
+        role.role() == common::v1::ROLE_HLC || role.role() == common::v1::ROLE_E2E;
+    if (!defines_world || role.robot() == common::v1::ROBOT_UNSPECIFIED) continue;
     out.robot = sim::robot_name(services::from_proto(role.robot(), "robot"));
     out.object = sim::object_name(services::from_proto(role.object(), "object"));
     out.world = sim::world_profile_name(services::from_proto(role.world(), "world"));

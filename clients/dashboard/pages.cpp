@@ -210,6 +210,10 @@ async function refresh() {{
       const run = await answer.json();
       draw(run);
       if (['succeeded', 'failed', 'cancelled'].includes(run.state)) return;
+    }} else if (answer.status >= 400 && answer.status < 500) {{
+      // Signed out, not allowed, or the run is gone: asking again will not help.
+      document.getElementById('curve').textContent = `stopped updating: HTTP ${{answer.status}}`;
+      return;
     }}
   }} catch (e) {{ /* the dashboard restarting: try again */ }}
   setTimeout(refresh, {});

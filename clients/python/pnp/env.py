@@ -6,7 +6,10 @@ hindsight relabelling, episodes of 50 steps that end truncated, never terminated
 Seeding: the environment's episodes come from its seed, episode i of a seed being the
 simulation service's episode (seed, 0, i) -- exactly the episodes `pnpctl evaluate --seed`
 plays. reset(seed=s) starts over from episode 0 of seed s; reset() goes on to the next.
-A physics fault (info["physics_fault"]) ends an episode early, truncated."""
+A physics fault (info["physics_fault"]) ends an episode early, truncated; the simulator
+has then already reset the world, so that step's observation, reward and is_success are
+of the new episode's first state (the diverged one is gone), and reset() goes on to the
+next episode as pnpctl evaluate does."""
 
 from __future__ import annotations
 
@@ -29,6 +32,18 @@ class _EnvBase:
 
     metadata = {"render_modes": []}
     render_mode = None
+    _np_random = None
+
+    @property
+    def np_random(self) -> np.random.Generator:
+        """The environment's own generator (seeded by reset(seed=...)), as gymnasium's."""
+        if self._np_random is None:
+            self._np_random = np.random.default_rng()
+        return self._np_random
+
+    def reset(self, *, seed=None, options=None):
+        if seed is not None:
+            self._np_random = np.random.default_rng(seed)
 
     @property
     def unwrapped(self):
@@ -47,17 +62,27 @@ class PickAndPlaceEnv(_gymnasium.Env if _gymnasium else _EnvBase):
 
     def __init__(self, sim_address: str | Endpoints | None = None, robot: str = "fetch",
                  object: str = "block", world: str = "gym", seed: int = 0,
-                 reward_type: str = "sparse", timeout_s: float = 30.0):
-        self._batch = SimBatch(sim_address, robot, object, world, seed, 1, reward_type, timeout_s)
+                 reward_type: str = "sparse", timeout_s: float = 30.0,
+                 idle_timeout_s: float | None = None):
+        """idle_timeout_s: how long the service keeps the environment between calls (its
+        default 300 s, at most 3600 s); after that a call raises NOT_FOUND and reset()
+        starts a new one."""
+        self._batch = SimBatch(sim_address, robot, object, world, seed, 1, reward_type, timeout_s,
+                               idle_timeout_s)
         self.robot, self.object, self.world = robot, object, world
         self.reward_type = reward_type
-        self.observation_space, self.action_space = goal_spaces(self._batch.spec)
+        try:
+            self.observation_space, self.action_space = goal_spaces(self._batch.spec)
+        except BaseException:
+            self._batch.close()
+            raise
         self.max_episode_steps = self._batch.spec.episode_steps
         self.step_s = self._batch.spec.step_s
         self.success_distance_m = self._batch.spec.success_distance_m
         self._goal: np.ndarray | None = None
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)  # seeds np_random, as gymnasium's check_env expects
         state = self._batch.reset_all(seed, options, self.action_space)[0]
         obs = observation_dict(state)
         self._goal = obs["desired_goal"]

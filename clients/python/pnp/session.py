@@ -52,12 +52,15 @@ class Session:
         try:
             answer = next(self._responses)
         except grpc.RpcError as e:
-            self._closed = True
+            self._abandon()
             raise from_rpc_error(e, "PredictSession", self._address) from None
         except StopIteration:
-            self._closed = True
+            self._abandon()
             raise PlatformError("PredictSession", self._address, grpc.StatusCode.UNAVAILABLE,
                                 "the server ended the session") from None
+        except BaseException:  # e.g. Ctrl-C while waiting: the stream is out of step now
+            self._abandon()
+            raise
         p = answer.prediction
         return Prediction(
             action=np.array([p.action.dx, p.action.dy, p.action.dz, p.action.gripper]),
@@ -69,6 +72,17 @@ class Session:
             placed=answer.placed,
             choreographer_checkpoint_id=p.choreographer_checkpoint_id,
             expert_checkpoint_id=p.expert_checkpoint_id)
+
+    def _abandon(self) -> None:
+        """Ends the request stream and cancels the call: gRPC's thread that reads the
+        requests is released, and nothing more is sent."""
+        self._closed = True
+        self._requests.put(_END)
+        self._responses.cancel()
+
+    def __del__(self):
+        if not getattr(self, "_closed", True):
+            self._abandon()
 
     def close(self) -> None:
         """Ends the stream (the server's status, if an error, is raised)."""

@@ -4,10 +4,12 @@ released on close; and the task's spaces, reward and faults."""
 
 from __future__ import annotations
 
+import grpc
 import numpy as np
 
 from pnp import names, reward
 from pnp.endpoints import Endpoints
+from pnp.errors import PlatformError
 from pnp.sim.v1 import sim_service_pb2 as sim
 from pnp.sim_client import ACTION_SIZE, GOAL_SIZE, OBSERVATION_SIZE, SimClient
 from pnp.spaces import Box, Dict
@@ -57,7 +59,8 @@ def goal_spaces(spec) -> tuple:
 
 class SimBatch:
     def __init__(self, sim_address: str | Endpoints | None, robot: str, object: str, world: str,
-                 seed: int, count: int, reward_type: str, timeout_s: float):
+                 seed: int, count: int, reward_type: str, timeout_s: float,
+                 idle_timeout_s: float | None = None):
         names.to_enum(names.ROBOTS, robot, "robot")
         names.to_enum(names.OBJECTS, object, "object")
         names.to_enum(names.WORLDS, world, "world")
@@ -69,8 +72,13 @@ class SimBatch:
         self.count = count
         self.reward_type = reward_type
         self.seed = int(seed)
+        self.idle_timeout_s = idle_timeout_s
         self.client = SimClient(resolve_endpoints(sim_address), timeout_s)
-        self.spec = self.client.spec(robot, object, world)
+        try:
+            self.spec = self.client.spec(robot, object, world)
+        except BaseException:
+            self.client.close()
+            raise
         self._env_id: str | None = None
         self._closed = False
 
@@ -85,7 +93,7 @@ class SimBatch:
             self.release()
         if self._env_id is None:
             self._env_id = self.client.create_env(self.robot, self.object, self.world, self.seed,
-                                                  self.count)
+                                                  self.count, self.idle_timeout_s)
         return self._env_id
 
     def reset_all(self, seed: int | None, options: dict | None, action_space) -> list:
@@ -96,7 +104,15 @@ class SimBatch:
         env_id = self.env_id(reseed=seed)
         if seed is not None:
             action_space.seed(int(seed))
-        return self.client.reset(env_id)
+        try:
+            return self.client.reset(env_id)
+        except PlatformError as e:
+            if e.code != grpc.StatusCode.NOT_FOUND:
+                raise
+            # Expired on the service (idle longer than its idle timeout): a new batch,
+            # whose episodes start again from the seed's first.
+            self._env_id = None
+            return self.client.reset(self.env_id())
 
     def started(self) -> bool:
         return self._env_id is not None
@@ -108,7 +124,11 @@ class SimBatch:
     def release(self) -> None:
         if self._env_id is not None:
             env_id, self._env_id = self._env_id, None
-            self.client.close_env(env_id)
+            try:
+                self.client.close_env(env_id)
+            except PlatformError as e:
+                if e.code != grpc.StatusCode.NOT_FOUND:  # expired already: nothing to release
+                    raise
 
     def close(self) -> None:
         if self._closed:

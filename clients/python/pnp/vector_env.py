@@ -18,21 +18,27 @@ MAX_ENVS = 64  # the service's largest batch
 
 
 class VectorPickAndPlaceEnv:
-    metadata = {"render_modes": [], "autoreset_mode": "same-step"}
+    metadata = {"render_modes": []}
 
     def __init__(self, num_envs: int, sim_address: str | Endpoints | None = None,
                  robot: str = "fetch", object: str = "block", world: str = "gym", seed: int = 0,
-                 reward_type: str = "sparse", timeout_s: float = 30.0):
+                 reward_type: str = "sparse", timeout_s: float = 30.0,
+                 idle_timeout_s: float | None = None):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or \
                 not 1 <= num_envs <= MAX_ENVS:
             raise ValueError(f"num_envs: expected an integer from 1 to {MAX_ENVS}, "
                              f"got {num_envs!r}")
         self.num_envs = int(num_envs)
         self._batch = SimBatch(sim_address, robot, object, world, seed, self.num_envs,
-                               reward_type, timeout_s)
+                               reward_type, timeout_s, idle_timeout_s)
         self.robot, self.object, self.world = robot, object, world
         self.reward_type = reward_type
-        self.single_observation_space, self.single_action_space = goal_spaces(self._batch.spec)
+        try:
+            self.single_observation_space, self.single_action_space = goal_spaces(
+                self._batch.spec)
+        except BaseException:
+            self._batch.close()
+            raise
         self.observation_space = _batched_dict(self.single_observation_space, self.num_envs)
         self.action_space = _batched_box(self.single_action_space, self.num_envs)
         self.max_episode_steps = self._batch.spec.episode_steps
@@ -66,12 +72,18 @@ class VectorPickAndPlaceEnv:
             finished = [k for k in indices if truncated[k]]
             info["final_observation"] = np.array([None] * self.num_envs, dtype=object)
             info["_final_observation"] = truncated.copy()
+            info["final_info"] = np.array([None] * self.num_envs, dtype=object)
+            info["_final_info"] = truncated.copy()
             for k in finished:
                 info["final_observation"][k] = per_env[k]
+                info["final_info"][k] = {"is_success": info["is_success"][k],
+                                         "elapsed_steps": int(info["elapsed_steps"][k]),
+                                         "physics_fault": info["physics_fault"][k]}
             for k, state in zip(finished, client.reset(env_id, finished)):
                 fresh = observation_dict(state)
                 for key in obs:
                     obs[key][k] = fresh[key]
+                info["elapsed_steps"][k] = state.elapsed_steps  # the new episode's
             self._goals = obs["desired_goal"].copy()
         return obs, rewards, terminated, truncated, info
 

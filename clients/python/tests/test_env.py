@@ -183,7 +183,9 @@ def test_a_vector_env_resets_finished_episodes_itself(sim_server):
             assert not truncated.any() and "final_observation" not in info
         obs, _, _, truncated, info = vec.step(np.zeros((2, 4)))
         last, *_ = single.step(ZERO)
-        assert truncated.all() and info["_final_observation"].all()
+        assert truncated.all() and info["_final_observation"].all() and info["_final_info"].all()
+        assert info["final_info"][0]["elapsed_steps"] == 50
+        np.testing.assert_array_equal(info["elapsed_steps"], 0)  # of the new episodes
         np.testing.assert_array_equal(info["final_observation"][0]["observation"],
                                       last["observation"])
         following, _ = single.reset()  # episode 1 of environment 0
@@ -198,3 +200,20 @@ def test_a_vector_env_refuses_actions_of_the_wrong_shape(sim_server):
             vec.step(np.zeros(4))
     with pytest.raises(ValueError, match="num_envs: expected an integer from 1 to 64"):
         pnp.VectorPickAndPlaceEnv(65, sim_server.address)
+
+
+def test_an_environment_the_service_dropped_is_replaced_at_the_next_reset(sim_server):
+    # As after an idle timeout: the service no longer knows the batch.
+    env = pnp.PickAndPlaceEnv(sim_server.address, seed=8)
+    first, _ = env.reset()
+    client = SimClient(pnp.Endpoints(sim=sim_server.address))
+    try:
+        client.close_env(env._batch.env_id())
+    finally:
+        client.close()
+    with pytest.raises(pnp.PlatformError) as e:
+        env.step(ZERO)
+    assert e.value.code == grpc.StatusCode.NOT_FOUND
+    again, _ = env.reset()  # a new batch: the seed's episodes from the first
+    np.testing.assert_array_equal(again["desired_goal"], first["desired_goal"])
+    env.close()  # nothing left to release, and no error

@@ -70,6 +70,9 @@ def test_compute_reward_takes_batches_of_any_shape(env):
 
 def test_the_success_flag_and_the_sparse_reward_agree(env):
     env.reset()
+    for _ in range(20):  # every step: reward 0 exactly when info["is_success"] is 1
+        _, reward, _, _, info = env.step(env.action_space.sample())
+        assert (reward == 0.0) == (info["is_success"] == 1.0)
     goals = env.reset()[0]["desired_goal"]
     near = goals + [0.049, 0, 0]
     far = goals + [0.05, 0, 0]

@@ -54,6 +54,8 @@ def test_a_session_passes_on_the_servers_refusal(platform):
             session.act(observation, np.zeros(3))
     assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
     assert "observation" in e.value.details
+    with pytest.raises(RuntimeError, match="closed"):  # the stream ended with the refusal
+        session.act(np.zeros(25), np.zeros(3))
 
 
 def test_the_example_plays_the_same_episodes_as_pnpctl_evaluate(sim_server, inference_server):
