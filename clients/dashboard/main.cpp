@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   services::add_client_security_flags(app, tls, "platform-");
   CLI11_PARSE(app, argc, argv);
   try {
+    services::validate_address(config.address, "--address");  // before the store is opened
     services::validate_address(sim, "--sim");
     services::validate_address(inference, "--inference");
     if (!auth_policy.empty())
