@@ -23,6 +23,7 @@
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
 #include "sim/pick_place_env.h"
+#include "store/run_store.h"
 #include "tools/common/cli.h"
 
 namespace {

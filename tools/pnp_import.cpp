@@ -6,10 +6,13 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "common/error.h"
+#include "services/store/remote_store.h"
+#include "services/store/store_flags.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "store/checkpoint_import.h"
@@ -20,7 +23,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Import a trained hierarchy into a store and promote it", "pnp-import"};
   std::string db, dir, robot = "panda", object = "block";
   bool json = false;
-  app.add_option("--db", db, "the SQLite store (created if missing)")->required();
+  auto* db_option = app.add_option("--db", db, "the SQLite store (created if missing)");
+  pnp::services::RemoteStoreFlags store_flags;
+  pnp::services::add_remote_store_flags(app, store_flags, db_option);
   app.add_option("--hierarchy", dir,
                  "a directory holding approach.ckpt, manipulate.ckpt, retract.ckpt, hlc.ckpt")
       ->required();
@@ -30,6 +35,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--json", json, "print the new checkpoint ids as one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
+    if (db.empty() != store_flags.remote())
+      pnp::throw_invalid_argument("--db", "a store file, or --store host:port", "neither");
     pnp::sim::parse_robot(robot, "--robot");
     pnp::sim::parse_object(object, "--object");
     for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
@@ -39,8 +46,11 @@ int main(int argc, char** argv) {
                                     "a directory with approach, manipulate, retract and hlc .ckpt",
                                     file.string() + " missing");
     }
-    pnp::store::RunStore store(db);
-    const auto ids = pnp::store::import_hierarchy(store, dir, robot, object);
+    const std::unique_ptr<pnp::store::Store> store =
+        store_flags.remote()
+            ? pnp::services::remote_store_opener(store_flags.address, store_flags.tls)()
+            : std::make_unique<pnp::store::RunStore>(db);
+    const auto ids = pnp::store::import_hierarchy(*store, dir, robot, object);
     if (json) {
       std::printf(
           "%s\n",

@@ -21,6 +21,7 @@
 #include "services/robot_sim/robot_controller_service.h"
 #include "sim/panda_hand.h"
 #include "store/checkpoint_import.h"
+#include "store/run_store.h"
 
 namespace pnp::faults {
 namespace {

@@ -14,6 +14,7 @@
 #include "services/inference/policy_service.h"
 #include "services/robot_sim/robot_controller_service.h"
 #include "store/checkpoint_import.h"
+#include "store/run_store.h"
 
 namespace pnp::bench {
 namespace {

@@ -10,6 +10,7 @@
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "services/common/address.h"
 #include "services/common/transport_security.h"
+#include "store/run_store.h"
 
 namespace pnp::dashboard {
 namespace {
@@ -19,11 +20,13 @@ constexpr int kDefaultEpisodes = 5;
 constexpr int kRunsListed = 200;
 constexpr std::size_t kMaxRequestBodyBytes = 64 * 1024;
 
-store::RunStore open_read_only(const std::string& db) {
-  if (db.empty()) throw_invalid_argument("--db", "the platform's store file", "none");
-  if (!std::filesystem::exists(db))
-    throw Error(ErrorCode::kFailedPrecondition, "--db: no store at " + db);
-  return store::RunStore(db, {.access = store::Access::kReadOnly});
+std::unique_ptr<store::Store> open_store(const DashboardConfig& config) {
+  if (config.open_store) return config.open_store();
+  if (config.db.empty()) throw_invalid_argument("--db", "the platform's store file", "none");
+  if (!std::filesystem::exists(config.db))
+    throw Error(ErrorCode::kFailedPrecondition, "--db: no store at " + config.db);
+  return std::make_unique<store::RunStore>(
+      config.db, store::DatabaseOptions{.access = store::Access::kReadOnly});
 }
 
 int http_status(ErrorCode code) {
@@ -129,7 +132,7 @@ void check_exposure(const DashboardConfig& config) {
 DashboardServer::DashboardServer(DashboardConfig config)
     : config_(std::move(config)),
       access_(config_.policy),
-      store_(open_read_only(config_.db)),
+      store_(open_store(config_)),
       player_(config_.sim, config_.inference) {
   check_exposure(config_);
   http_ = make_http(config_);
@@ -168,8 +171,8 @@ void DashboardServer::routes() {
       std::vector<store::Promotion> promotions;
       {
         std::lock_guard lock(store_mutex_);
-        runs = store_.list_runs(recent_runs());
-        promotions = store_.promotions();
+        runs = store_->list_runs(recent_runs());
+        promotions = store_->promotions();
       }
       ServingView serving = serving_view(config_.inference);
       if (serving.ready) {
@@ -186,15 +189,15 @@ void DashboardServer::routes() {
                                       httplib::Response& response) {
     answer(response, [&] {
       std::lock_guard lock(store_mutex_);
-      const auto run = store_.get_run(run_id_of(request));
-      response.set_content(run_page(run, store_.checkpoints(run.id)), "text/html; charset=utf-8");
+      const auto run = store_->get_run(run_id_of(request));
+      response.set_content(run_page(run, store_->checkpoints(run.id)), "text/html; charset=utf-8");
     });
   });
   http_->Get("/api/runs", [this](const httplib::Request&, httplib::Response& response) {
     answer(response, [&] {
       nlohmann::json out = nlohmann::json::array();
       std::lock_guard lock(store_mutex_);
-      for (const auto& run : store_.list_runs(recent_runs())) out.push_back(run_json(run, {}));
+      for (const auto& run : store_->list_runs(recent_runs())) out.push_back(run_json(run, {}));
       response.set_content(out.dump(), "application/json");
     });
   });
@@ -202,8 +205,8 @@ void DashboardServer::routes() {
       R"(/api/runs/(\d+))", [this](const httplib::Request& request, httplib::Response& response) {
         answer(response, [&] {
           std::lock_guard lock(store_mutex_);
-          const auto run = store_.get_run(run_id_of(request));
-          response.set_content(run_json(run, store_.metrics(run.id)).dump(), "application/json");
+          const auto run = store_->get_run(run_id_of(request));
+          response.set_content(run_json(run, store_->metrics(run.id)).dump(), "application/json");
         });
       });
   http_->Get("/episodes", [this](const httplib::Request& request, httplib::Response& response) {

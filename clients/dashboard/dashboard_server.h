@@ -18,13 +18,14 @@
 
 #include "clients/dashboard/dashboard_access.h"
 #include "clients/dashboard/episode_player.h"
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::dashboard {
 
 struct DashboardConfig {
   std::string address = "127.0.0.1:8080";  // beyond loopback only with TLS
-  std::string db;
+  std::string db;                          // the store file, read only ...
+  store::StoreOpener open_store{};         // ... unless set: the store through pnp-store-server
   std::shared_ptr<grpc::Channel> sim, inference;
   std::string tls_cert, tls_key;                       // both: HTTPS
   std::shared_ptr<const security::AuthPolicy> policy;  // set: readers only (needs TLS)
@@ -32,7 +33,8 @@ struct DashboardConfig {
 
 class DashboardServer {
  public:
-  // Opens the store read-only (it must exist) and listens; INVALID_ARGUMENT or
+  // Opens the store (a file read-only, which must exist; or through the store server) and
+  // listens; INVALID_ARGUMENT or
   // FAILED_PRECONDITION naming the flag (plaintext beyond loopback, a policy without
   // TLS, unreadable certificates), UNAVAILABLE if it cannot listen.
   explicit DashboardServer(DashboardConfig config);
@@ -48,8 +50,8 @@ class DashboardServer {
 
   DashboardConfig config_;
   DashboardAccess access_;
-  std::mutex store_mutex_;  // one connection, used by one handler at a time
-  store::RunStore store_;
+  std::mutex store_mutex_;  // one handle, used by one handler at a time
+  std::unique_ptr<store::Store> store_;
   EpisodePlayer player_;
   std::unique_ptr<httplib::Server> http_;  // an httplib::SSLServer with TLS
   int port_ = 0;

@@ -13,6 +13,8 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/transport_security.h"
+#include "services/store/remote_store.h"
+#include "services/store/store_flags.h"
 
 int main(int argc, char** argv) {
   using namespace pnp;
@@ -32,8 +34,11 @@ int main(int argc, char** argv) {
   app.add_option("--auth-policy", auth_policy,
                  "the platform's authorization policy: readers only (needs TLS)")
       ->envname("PNP_AUTH_POLICY");
-  app.add_option("--db", config.db, "the platform's SQLite store (read only) [$PNP_DB]")
-      ->envname("PNP_DB");
+  auto* db_option =
+      app.add_option("--db", config.db, "the platform's SQLite store (read only) [$PNP_DB]")
+          ->envname("PNP_DB");
+  services::RemoteStoreFlags store_flags;
+  services::add_remote_store_flags(app, store_flags, db_option);
   app.add_option("--sim", sim, "simulation service, for the episode viewer")
       ->envname("PNP_SIM_ADDRESS")
       ->capture_default_str();
@@ -52,6 +57,8 @@ int main(int argc, char** argv) {
     if (!auth_policy.empty())
       config.policy =
           std::make_shared<const security::AuthPolicy>(security::AuthPolicy::load(auth_policy));
+    if (store_flags.remote())
+      config.open_store = services::remote_store_opener(store_flags.address, store_flags.tls);
     config.sim = services::dial(sim, tls);
     config.inference = services::dial(inference, tls);
     const dashboard::DashboardServer server(config);

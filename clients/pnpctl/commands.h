@@ -9,6 +9,7 @@
 
 #include "clients/pnpctl/endpoints.h"
 #include "pnp/train/v1/train_service.pb.h"
+#include "services/store/store_flags.h"
 #include "training/training_spec.h"
 
 namespace pnp::pnpctl {
@@ -56,6 +57,16 @@ int plot_command(const Endpoints& endpoints, const std::string& role,
 // Deletes the checkpoints retention does not keep (store::RetentionPolicy) from the store
 // file at `db_path`, and gives the freed pages back to the filesystem.
 int gc_command(const std::string& db_path, int keep_last, bool json);
+
+// A consistent copy of the store (store/backup.h) into the new file `destination`, from
+// the store file `db` or through the store server `store`.
+struct BackupArgs {
+  std::string destination;
+  std::string db;
+  services::RemoteStoreFlags store;
+  bool json = false;
+};
+int backup_command(const BackupArgs& args);
 
 // The audit trail of the store file at `db`: operator and robot calls, allowed or refused,
 // oldest first (the newest `limit` since `since`: parse_since's forms).

@@ -146,6 +146,18 @@ int main(int argc, char** argv) {
   gc_cmd->add_flag("--json", gc_json, "machine-readable output");
   gc_cmd->callback([&] { command = [&] { return gc_command(gc_db, gc_keep, gc_json); }; });
 
+  BackupArgs backup;
+  auto* backup_cmd = app.add_subcommand(
+      "backup",
+      "copy the store, consistently, while the servers keep training and serving (the copy "
+      "is a store file: serve it with --db)");
+  backup_cmd->add_option("FILE", backup.destination, "the new file (never overwritten)")
+      ->required();
+  auto* backup_db = backup_cmd->add_option("--db", backup.db, "the SQLite store file");
+  pnp::services::add_remote_store_flags(*backup_cmd, backup.store, backup_db);
+  backup_cmd->add_flag("--json", backup.json, "machine-readable output");
+  backup_cmd->callback([&] { command = [&] { return backup_command(backup); }; });
+
   AuditArgs audit;
   auto* audit_cmd = app.add_subcommand(
       "audit", "who called which operator or robot RPC, and how it ended (a store's audit trail)");

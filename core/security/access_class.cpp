@@ -12,6 +12,8 @@ std::string_view access_class_name(AccessClass c) {
       return "operator";
     case AccessClass::kRobot:
       return "robot";
+    case AccessClass::kService:
+      return "service";
   }
   return "unknown";
 }

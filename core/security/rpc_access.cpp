@@ -9,6 +9,7 @@ constexpr RpcRequirement kReader{AccessClass::kReader};
 constexpr RpcRequirement kAgent{AccessClass::kAgent};
 constexpr RpcRequirement kOperator{AccessClass::kOperator};
 constexpr RpcRequirement kRobot{AccessClass::kRobot};
+constexpr RpcRequirement kService{AccessClass::kService};
 constexpr RpcRequirement kAnyone{std::nullopt};  // any authenticated principal
 
 constexpr std::array kTable{
@@ -46,6 +47,32 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.robot.v1.RobotControllerService/Stop", kAnyone, true},
     RpcAccess{"/pnp.robot.v1.RobotControllerService/Resume", kOperator, true},
     RpcAccess{"/pnp.robot.v1.SimulatedSceneService/ResetScene", kRobot, true},
+    // The store (pnp-store-server): the platform's servers read as readers and write as
+    // services. Not audited here: the operator call that caused a write (create, cancel,
+    // promote) is audited by the server it reached, which knows the operator.
+    RpcAccess{"/pnp.store.v1.StoreService/CreateRun", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/GetRun", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ListRuns", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/SetRunState", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ClaimNextRun", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/RenewLease", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ReleaseRun", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/CountClaimable", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/RecordMetric", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ListMetrics", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/SaveCheckpoint", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/LoadCheckpoint", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/GetCheckpointInfo", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ListCheckpoints", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/LatestCheckpoint", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ImportFinished", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/Promote", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/GetPromotion", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ListPromotions", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/WatchPromotions", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/PruneCheckpoints", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/CollectGarbage", kOperator, true},
+    RpcAccess{"/pnp.store.v1.StoreService/Backup", kOperator, true},
 };
 
 }  // namespace

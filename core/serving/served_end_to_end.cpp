@@ -45,14 +45,16 @@ class EndToEndController final : public PolicyController {
 
 }  // namespace
 
-std::optional<std::int64_t> ServedEndToEnd::promoted_id(store::RunStore& store) {
-  const auto p = store.promoted("e2e");
-  if (!p) return std::nullopt;
-  return p->checkpoint_id;
+std::optional<std::int64_t> ServedEndToEnd::promoted_id(
+    std::span<const store::Promotion> promotions) {
+  for (const auto& p : promotions)
+    if (p.role == "e2e") return p.checkpoint_id;
+  return std::nullopt;
 }
 
-std::shared_ptr<const ServedEndToEnd> ServedEndToEnd::load_promoted(store::RunStore& store) {
-  const auto id = promoted_id(store);
+std::shared_ptr<const ServedEndToEnd> ServedEndToEnd::load_promoted(
+    store::Store& store, std::span<const store::Promotion> promotions) {
+  const auto id = promoted_id(promotions);
   if (!id) {
     throw Error(ErrorCode::kFailedPrecondition,
                 "no promoted checkpoint for e2e: promote an end-to-end checkpoint first");

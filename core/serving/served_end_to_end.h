@@ -16,7 +16,7 @@
 #include "serving/served_policy.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::serving {
 
@@ -25,9 +25,10 @@ class ServedEndToEnd final : public ServedPolicy {
   // Loads the promoted e2e checkpoint. FAILED_PRECONDITION naming e2e if none is
   // promoted; DATA_LOSS for a corrupted checkpoint; INVALID_ARGUMENT if it is not an
   // end-to-end DDPG+HER checkpoint.
-  static std::shared_ptr<const ServedEndToEnd> load_promoted(store::RunStore& store);
+  static std::shared_ptr<const ServedEndToEnd> load_promoted(
+      store::Store& store, std::span<const store::Promotion> promotions);
   // The id load_promoted would serve (without loading), or nullopt if none is promoted.
-  static std::optional<std::int64_t> promoted_id(store::RunStore& store);
+  static std::optional<std::int64_t> promoted_id(std::span<const store::Promotion> promotions);
 
   // Builds from an already-loaded checkpoint (tests, tools). INVALID_ARGUMENT naming the
   // checkpoint unless its role is e2e and its algorithm ddpg_her.

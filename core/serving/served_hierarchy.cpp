@@ -41,29 +41,39 @@ class HierarchyPolicyController final : public PolicyController {
 
 }  // namespace
 
-std::optional<ServedIds> ServedHierarchy::promoted_ids(store::RunStore& store) {
+std::optional<ServedIds> ServedHierarchy::promoted_ids(
+    std::span<const store::Promotion> promotions) {
+  const auto find = [&](std::string_view role) -> std::optional<std::int64_t> {
+    for (const auto& p : promotions)
+      if (p.role == role) return p.checkpoint_id;
+    return std::nullopt;
+  };
   ServedIds ids;
   for (std::size_t k = 0; k < kExpertRoles.size(); ++k) {
-    const auto p = store.promoted(kExpertRoles[k]);
-    if (!p) return std::nullopt;
-    ids.experts[k] = p->checkpoint_id;
+    const auto id = find(kExpertRoles[k]);
+    if (!id) return std::nullopt;
+    ids.experts[k] = *id;
   }
-  const auto hlc = store.promoted("hlc");
+  const auto hlc = find("hlc");
   if (!hlc) return std::nullopt;
-  ids.choreographer = hlc->checkpoint_id;
+  ids.choreographer = *hlc;
   return ids;
 }
 
-std::shared_ptr<const ServedHierarchy> ServedHierarchy::load_promoted(store::RunStore& store) {
-  std::string missing;
-  for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
-    if (!store.promoted(role)) missing += (missing.empty() ? "" : ", ") + std::string(role);
-  }
-  if (!missing.empty()) {
+std::shared_ptr<const ServedHierarchy> ServedHierarchy::load_promoted(
+    store::Store& store, std::span<const store::Promotion> promotions) {
+  const auto promoted = promoted_ids(promotions);
+  if (!promoted) {
+    std::string missing;
+    for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
+      bool found = false;
+      for (const auto& p : promotions) found = found || p.role == role;
+      if (!found) missing += (missing.empty() ? "" : ", ") + std::string(role);
+    }
     throw Error(ErrorCode::kFailedPrecondition,
                 "no promoted checkpoint for " + missing + ": promote one per role first");
   }
-  const ServedIds ids = *promoted_ids(store);
+  const ServedIds ids = *promoted;
   std::array<rl::LoadedExpert, sim::kNumSubtasks> experts{
       rl::load_expert(store.load_checkpoint(ids.experts[0]).blob),
       rl::load_expert(store.load_checkpoint(ids.experts[1]).blob),

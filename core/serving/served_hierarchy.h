@@ -16,7 +16,7 @@
 #include "serving/served_policy.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::serving {
 
@@ -29,13 +29,15 @@ struct ServedIds {
 
 class ServedHierarchy final : public ServedPolicy {
  public:
-  // Loads the promoted checkpoints. FAILED_PRECONDITION naming the roles not promoted
+  // Loads the checkpoints `promotions` (one consistent set: Store::promotions()) name for
+  // the hierarchy. FAILED_PRECONDITION naming the roles not promoted
   // yet; DATA_LOSS for a corrupted checkpoint; INVALID_ARGUMENT if the checkpoints were
   // trained on different robots. The object served is the retract expert's (a retract
   // fine-tuned for a new shape serves beside experts trained on another).
-  static std::shared_ptr<const ServedHierarchy> load_promoted(store::RunStore& store);
+  static std::shared_ptr<const ServedHierarchy> load_promoted(
+      store::Store& store, std::span<const store::Promotion> promotions);
   // The ids load_promoted would serve (without loading), or nullopt if a role is missing.
-  static std::optional<ServedIds> promoted_ids(store::RunStore& store);
+  static std::optional<ServedIds> promoted_ids(std::span<const store::Promotion> promotions);
 
   // Builds from already-loaded checkpoints (tests, tools).
   ServedHierarchy(rl::LoadedChoreographer choreographer,

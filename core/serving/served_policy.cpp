@@ -53,22 +53,24 @@ ServedPolicy::Lease::~Lease() {
   if (owner_ && controller_) owner_->give_back(std::move(controller_));
 }
 
-std::optional<std::vector<std::int64_t>> promoted_checkpoint_ids(store::RunStore& store,
-                                                                 PolicyKind kind) {
+std::optional<std::vector<std::int64_t>> promoted_checkpoint_ids(
+    std::span<const store::Promotion> promotions, PolicyKind kind) {
   if (kind == PolicyKind::kEndToEnd) {
-    const auto id = ServedEndToEnd::promoted_id(store);
+    const auto id = ServedEndToEnd::promoted_id(promotions);
     if (!id) return std::nullopt;
     return std::vector<std::int64_t>{*id};
   }
-  const auto ids = ServedHierarchy::promoted_ids(store);
+  const auto ids = ServedHierarchy::promoted_ids(promotions);
   if (!ids) return std::nullopt;
   return std::vector<std::int64_t>{ids->experts[0], ids->experts[1], ids->experts[2],
                                    ids->choreographer};
 }
 
-std::shared_ptr<const ServedPolicy> load_promoted(store::RunStore& store, PolicyKind kind) {
-  if (kind == PolicyKind::kEndToEnd) return ServedEndToEnd::load_promoted(store);
-  return ServedHierarchy::load_promoted(store);
+std::shared_ptr<const ServedPolicy> load_promoted(store::Store& store,
+                                                  std::span<const store::Promotion> promotions,
+                                                  PolicyKind kind) {
+  if (kind == PolicyKind::kEndToEnd) return ServedEndToEnd::load_promoted(store, promotions);
+  return ServedHierarchy::load_promoted(store, promotions);
 }
 
 }  // namespace pnp::serving

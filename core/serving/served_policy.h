@@ -23,7 +23,7 @@
 #include "sim/robot.h"
 #include "sim/subtask.h"
 #include "sim/world_profile.h"
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::serving {
 
@@ -113,11 +113,13 @@ class ServedPolicy : public std::enable_shared_from_this<ServedPolicy> {
 
 // The ids load_promoted would serve (without loading), in served_roles(kind) order, or
 // nullopt if a role is not promoted yet.
-std::optional<std::vector<std::int64_t>> promoted_checkpoint_ids(store::RunStore& store,
-                                                                 PolicyKind kind);
+std::optional<std::vector<std::int64_t>> promoted_checkpoint_ids(
+    std::span<const store::Promotion> promotions, PolicyKind kind);
 // Loads the promoted checkpoints of `kind`. FAILED_PRECONDITION naming the roles not
 // promoted yet; DATA_LOSS for a corrupted checkpoint; INVALID_ARGUMENT for checkpoints
 // that do not fit together.
-std::shared_ptr<const ServedPolicy> load_promoted(store::RunStore& store, PolicyKind kind);
+std::shared_ptr<const ServedPolicy> load_promoted(store::Store& store,
+                                                  std::span<const store::Promotion> promotions,
+                                                  PolicyKind kind);
 
 }  // namespace pnp::serving

@@ -25,12 +25,12 @@ FinishedRun read_file(const CheckpointFile& file) {
 
 }  // namespace
 
-std::int64_t import_checkpoint(RunStore& store, const CheckpointFile& file, bool promote) {
+std::int64_t import_checkpoint(Store& store, const CheckpointFile& file, bool promote) {
   const FinishedRun run = read_file(file);
   return store.import_finished(std::span<const FinishedRun>(&run, 1), promote).front();
 }
 
-std::vector<std::int64_t> import_hierarchy(RunStore& store, const std::filesystem::path& dir,
+std::vector<std::int64_t> import_hierarchy(Store& store, const std::filesystem::path& dir,
                                            const std::string& robot, const std::string& object) {
   std::vector<FinishedRun> runs;
   for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::store {
 
@@ -21,12 +21,12 @@ struct CheckpointFile {
 };
 
 // Returns the new checkpoint's id. NOT_FOUND when the file cannot be read.
-std::int64_t import_checkpoint(RunStore& store, const CheckpointFile& file, bool promote);
+std::int64_t import_checkpoint(Store& store, const CheckpointFile& file, bool promote);
 
 // approach.ckpt, manipulate.ckpt, retract.ckpt and hlc.ckpt from `dir`, promoted, all in
 // one transaction: a server reading the store sees the whole hierarchy or none of it.
 // Returns the checkpoint ids in that order.
-std::vector<std::int64_t> import_hierarchy(RunStore& store, const std::filesystem::path& dir,
+std::vector<std::int64_t> import_hierarchy(Store& store, const std::filesystem::path& dir,
                                            const std::string& robot, const std::string& object);
 
 }  // namespace pnp::store

@@ -4,6 +4,7 @@
 
 #include "common/checksum.h"
 #include "common/error.h"
+#include "store/backup.h"
 #include "store/schema.h"
 
 namespace pnp::store {
@@ -508,10 +509,6 @@ std::vector<Promotion> RunStore::promote(std::span<const std::int64_t> checkpoin
   return out;
 }
 
-Promotion RunStore::promote(std::int64_t checkpoint_id, const std::string& by) {
-  return promote(std::span<const std::int64_t>(&checkpoint_id, 1), by).front();
-}
-
 std::optional<Promotion> RunStore::promoted(const std::string& role) {
   if (!is_known_role(role))
     throw_invalid_argument("role", "one of approach, manipulate, retract, hlc, e2e",
@@ -600,6 +597,12 @@ GcReport RunStore::collect_garbage(const RetentionPolicy& policy) {
   report.pages_freed = before - db_.pragma_int("page_count");
   db_.execute("PRAGMA wal_checkpoint(TRUNCATE)");
   return report;
+}
+
+BackupReport RunStore::backup(const std::string& destination) {
+  if (db_.path() == ":memory:")
+    throw Error(ErrorCode::kFailedPrecondition, "backup: an in-memory store has no file to copy");
+  return backup_store(db_.path(), destination);
 }
 
 }  // namespace pnp::store

@@ -19,9 +19,9 @@ std::string file_of(sqlite3* db) {
 // connection holds the lock past the busy timeout); a full disk is RESOURCE_EXHAUSTED and a
 // read-only file FAILED_PRECONDITION (retrying will not help, an operator must); a damaged
 // file is DATA_LOSS. Every message names the file.
-[[noreturn]] void fail(sqlite3* db, int code, std::string_view what) {
-  std::string message = "store " + file_of(db) + ": " + std::string(what) + ": " +
-                        (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
+[[noreturn]] void fail(sqlite3* db, int code, std::string_view what, std::string_view file = {}) {
+  std::string message = "store " + (file.empty() ? file_of(db) : std::string(file)) + ": " +
+                        std::string(what) + ": " + (db ? sqlite3_errmsg(db) : sqlite3_errstr(code));
   // The operating system's word for an I/O failure says which: no space, file too large...
   const int os_error = db ? sqlite3_system_errno(db) : 0;
   const int primary = code & 0xff;
@@ -92,7 +92,8 @@ Database::Database(const std::string& path, const DatabaseOptions& options)
   const int rc = sqlite3_open_v2(path.c_str(), &raw, flags,
                                  options.vfs.empty() ? nullptr : options.vfs.c_str());
   db_.reset(raw);  // closed even when opening failed
-  if (rc != SQLITE_OK) fail(raw, rc, "opening the database");
+  // A connection that failed to open has no file name yet: name the path asked for.
+  if (rc != SQLITE_OK) fail(raw, rc, "opening the database", path);
   sqlite3_extended_result_codes(raw, 1);
   sqlite3_busy_timeout(raw, static_cast<int>(options.busy_timeout.count()));
   execute("PRAGMA foreign_keys = ON");

@@ -63,7 +63,7 @@ std::pair<TrainingSpec, CheckpointRefs> parse_config(const std::string& text) {
 }
 
 // A stored checkpoint, checked to be of `role`.
-store::Checkpoint load_of_role(store::RunStore& store, std::int64_t id, const std::string& role,
+store::Checkpoint load_of_role(store::Store& store, std::int64_t id, const std::string& role,
                                const std::string& field) {
   if (id <= 0) throw_invalid_argument(field, "a positive checkpoint id", std::to_string(id));
   store::Checkpoint c = store.load_checkpoint(id);
@@ -103,13 +103,18 @@ RunManagerOptions completed(RunManagerOptions options) {
     throw_invalid_argument("lease", "at least 100 ms",
                            std::to_string(options.lease.count()) + " ms");
   if (!options.log) options.log = [](const std::string& line) { std::cerr << line << std::endl; };
+  if (!options.open_store) {
+    options.open_store = [path = options.db_path]() -> std::unique_ptr<store::Store> {
+      return std::make_unique<store::RunStore>(path);
+    };
+  }
   return options;
 }
 
 }  // namespace
 
 RunManager::RunManager(const RunManagerOptions& options)
-    : options_(completed(options)), handler_store_(options.db_path) {
+    : options_(completed(options)), handler_store_(options_.open_store()) {
   if (!store::is_known_role(options_.role))
     throw_invalid_argument("role", "one of approach, manipulate, retract, hlc, e2e",
                            "\"" + options_.role + "\"");
@@ -133,11 +138,11 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
   std::lock_guard lock(handler_mutex_);
   if (refs.parent)
     check_parent_shape(
-        spec, load_of_role(handler_store_, *refs.parent, spec.role, "parent_checkpoint_id"));
+        spec, load_of_role(*handler_store_, *refs.parent, spec.role, "parent_checkpoint_id"));
   if (spec.role == "hlc") {
     if (refs.experts.empty()) {
       for (std::size_t k = 0; k < sim::kNumSubtasks; ++k) {
-        const auto promoted = handler_store_.promoted(expert_role(k));
+        const auto promoted = handler_store_->promoted(expert_role(k));
         if (!promoted) {
           throw Error(ErrorCode::kFailedPrecondition,
                       "no promoted " + expert_role(k) +
@@ -160,7 +165,7 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
     }
   }
   for (std::size_t k = 0; k < refs.experts.size(); ++k) {
-    load_of_role(handler_store_, refs.experts[k], expert_role(k),
+    load_of_role(*handler_store_, refs.experts[k], expert_role(k),
                  (spec.role == "hlc" ? "expert_checkpoint_ids[" : "prefix_checkpoint_ids[") +
                      std::to_string(k) + "]");
   }
@@ -175,7 +180,7 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
                         std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   store::RunRecord run;
   try {
-    run = handler_store_.create_run(record);
+    run = handler_store_->create_run(record);
   } catch (const std::exception& e) {
     note_store_write(&e);
     throw;
@@ -192,7 +197,7 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
 
 store::RunRecord RunManager::cancel(std::int64_t run_id) {
   std::lock_guard lock(handler_mutex_);
-  const store::RunRecord run = handler_store_.get_run(run_id);
+  const store::RunRecord run = handler_store_->get_run(run_id);
   if (run.spec.role != options_.role) {
     throw Error(ErrorCode::kFailedPrecondition, "run " + std::to_string(run_id) + " is a " +
                                                     run.spec.role + " run: cancel it on the " +
@@ -213,37 +218,37 @@ store::RunRecord RunManager::cancel(std::int64_t run_id) {
   }
   // Pending, or held by another manager of the role: that one stops it at its next
   // heartbeat, when renewing the lease finds the run cancelled.
-  const store::RunRecord cancelled = handler_store_.set_state(run_id, store::RunState::kCancelled);
+  const store::RunRecord cancelled = handler_store_->set_state(run_id, store::RunState::kCancelled);
   changed();
   return cancelled;
 }
 
 store::RunRecord RunManager::get(std::int64_t run_id) {
   std::lock_guard lock(handler_mutex_);
-  return handler_store_.get_run(run_id);
+  return handler_store_->get_run(run_id);
 }
 
 std::vector<store::RunRecord> RunManager::list(store::RunFilter filter) {
   filter.role = options_.role;
   std::lock_guard lock(handler_mutex_);
-  return handler_store_.list_runs(filter);
+  return handler_store_->list_runs(filter);
 }
 
 std::vector<store::MetricPoint> RunManager::metrics(std::int64_t run_id) {
   std::lock_guard lock(handler_mutex_);
-  return handler_store_.metrics(run_id);
+  return handler_store_->metrics(run_id);
 }
 
 std::vector<store::MetricPoint> RunManager::metrics_after(std::int64_t run_id,
                                                           long long after_env_steps) {
   std::lock_guard lock(handler_mutex_);
-  return handler_store_.metrics_after(run_id, after_env_steps);
+  return handler_store_->metrics_after(run_id, after_env_steps);
 }
 
 std::vector<store::CheckpointInfo> RunManager::checkpoints(std::int64_t run_id) {
   std::lock_guard lock(handler_mutex_);
-  handler_store_.get_run(run_id);  // NOT_FOUND for an unknown run
-  return handler_store_.checkpoints(run_id);
+  handler_store_->get_run(run_id);  // NOT_FOUND for an unknown run
+  return handler_store_->checkpoints(run_id);
 }
 
 std::optional<double> RunManager::eta_s(std::int64_t run_id) const {
@@ -259,7 +264,7 @@ RunManager::Load RunManager::load() {
   std::int64_t claimable = 0;
   {
     std::lock_guard lock(handler_mutex_);
-    claimable = handler_store_.count_claimable(options_.role, options_.owner);
+    claimable = handler_store_->count_claimable(options_.role, options_.owner);
   }
   std::lock_guard lock(mutex_);
   Load load;
@@ -328,13 +333,13 @@ void RunManager::work(std::stop_token shutdown) {
   // The worker's own connection, opened here and reopened after a failure: nothing that
   // goes wrong in this thread may end the process (an escaping exception would call
   // std::terminate with no word of why).
-  std::optional<store::RunStore> store;
+  std::unique_ptr<store::Store> store;
   int failures = 0;
   const auto poll = options_.lease / 4;
   while (!shutdown.stop_requested()) {
     std::optional<store::RunRecord> claimed;
     try {
-      if (!store) store.emplace(options_.db_path);
+      if (!store) store = options_.open_store();
       claimed = store::with_retry(
           options_.retry,
           [&] { return store->claim_next(options_.role, options_.owner, options_.lease); },
@@ -379,7 +384,7 @@ void RunManager::work(std::stop_token shutdown) {
 }
 
 void RunManager::heartbeat(std::stop_token shutdown) {
-  std::optional<store::RunStore> store;
+  std::unique_ptr<store::Store> store;
   while (store::sleep_unless_stopped(options_.lease / 4, shutdown)) {
     std::int64_t run_id = 0;
     {
@@ -388,7 +393,7 @@ void RunManager::heartbeat(std::stop_token shutdown) {
       run_id = active_->run_id;
     }
     try {
-      if (!store) store.emplace(options_.db_path);
+      if (!store) store = options_.open_store();
       if (store->renew_lease(run_id, options_.owner, options_.lease)) {
         note_store_write(nullptr);
         continue;
@@ -417,9 +422,8 @@ void RunManager::heartbeat(std::stop_token shutdown) {
   }
 }
 
-RunManager::Turn RunManager::finish(store::RunStore& store, std::int64_t run_id,
-                                    store::RunState state, const std::string& error,
-                                    const std::stop_token& shutdown) {
+RunManager::Turn RunManager::finish(store::Store& store, std::int64_t run_id, store::RunState state,
+                                    const std::string& error, const std::stop_token& shutdown) {
   try {
     store::with_retry(
         options_.retry, [&] { store.set_state(run_id, state, error, options_.owner); }, shutdown);
@@ -437,7 +441,7 @@ RunManager::Turn RunManager::finish(store::RunStore& store, std::int64_t run_id,
   }
 }
 
-void RunManager::save_final_weights(store::RunStore& store, std::int64_t run_id,
+void RunManager::save_final_weights(store::Store& store, std::int64_t run_id,
                                     const TrainingOutcome& outcome, long long start_steps) {
   const rl::TrainingResult& result = outcome.result;
   const long long evaluated = result.curve.empty() ? 0 : result.curve.back().env_steps;
@@ -468,7 +472,7 @@ void RunManager::save_final_weights(store::RunStore& store, std::int64_t run_id,
   }
 }
 
-RunManager::Turn RunManager::train(store::RunStore& store, const store::RunRecord& run,
+RunManager::Turn RunManager::train(store::Store& store, const store::RunRecord& run,
                                    std::stop_token run_stop, const std::stop_token& shutdown) {
   const std::int64_t run_id = run.id;
   const auto lost = [&] {

@@ -4,7 +4,7 @@
 //
 // A run is validated completely (spec, and every checkpoint it references: present,
 // intact, of the right role) before it is stored, so a refused request leaves nothing
-// behind. The worker claims runs from the store (store::RunStore::claim_next) and holds
+// behind. The worker claims runs from the store (store::Store::claim_next) and holds
 // each with a lease that a heartbeat renews, so several managers of one role on one store
 // (several servers, or a restarted one beside a hung one) never train the same run: a run
 // whose owner stops renewing (killed, hung) is taken over by another manager once its
@@ -42,7 +42,8 @@ struct CheckpointRefs {
 };
 
 struct RunManagerOptions {
-  std::string db_path;
+  std::string db_path;  // the SQLite store, opened in this process, unless open_store is set
+
   std::string role;                  // the one role this manager trains
   std::string code_commit;           // recorded with every run and checkpoint
   std::size_t threads = 0;           // trainer threads (0: all cores); results do not depend on it
@@ -59,6 +60,9 @@ struct RunManagerOptions {
   // Where the worker reports what it could not do (a busy store, a run taken over); the
   // service passes its logger. Empty: standard error.
   std::function<void(const std::string&)> log{};
+  // Opens one handle on the store (the manager keeps one per thread); empty: a RunStore on
+  // db_path. A server whose store is pnp-store-server passes a RemoteStore opener.
+  store::StoreOpener open_store{};
 };
 
 class RunManager {
@@ -133,12 +137,12 @@ class RunManager {
 
   void work(std::stop_token shutdown);
   void heartbeat(std::stop_token shutdown);
-  Turn train(store::RunStore& store, const store::RunRecord& run, std::stop_token run_stop,
+  Turn train(store::Store& store, const store::RunRecord& run, std::stop_token run_stop,
              const std::stop_token& shutdown);
   // Keeps the weights of a trainer stopped between evaluations (shutdown or cancel).
-  void save_final_weights(store::RunStore& store, std::int64_t run_id,
-                          const TrainingOutcome& outcome, long long start_steps);
-  Turn finish(store::RunStore& store, std::int64_t run_id, store::RunState state,
+  void save_final_weights(store::Store& store, std::int64_t run_id, const TrainingOutcome& outcome,
+                          long long start_steps);
+  Turn finish(store::Store& store, std::int64_t run_id, store::RunState state,
               const std::string& error, const std::stop_token& shutdown);
   void sleep_until_woken(std::chrono::milliseconds timeout, const std::stop_token& shutdown);
   void report(const std::string& message) const;
@@ -148,7 +152,7 @@ class RunManager {
 
   RunManagerOptions options_;
   std::mutex handler_mutex_;
-  store::RunStore handler_store_;  // for request handlers; guarded by handler_mutex_
+  std::unique_ptr<store::Store> handler_store_;  // for request handlers; guarded by handler_mutex_
 
   mutable std::mutex mutex_;
   std::condition_variable_any wake_cv_;

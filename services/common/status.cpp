@@ -70,6 +70,8 @@ void throw_if_error(const grpc::Status& status, std::string_view what, std::stri
       throw Error(ErrorCode::kDataLoss, message);
     case grpc::StatusCode::CANCELLED:
       throw Error(ErrorCode::kCancelled, message);
+    case grpc::StatusCode::ABORTED:
+      throw Error(ErrorCode::kAborted, message);
     case grpc::StatusCode::UNAVAILABLE:
     case grpc::StatusCode::DEADLINE_EXCEEDED:
       throw Error(ErrorCode::kUnavailable, message);

@@ -1,7 +1,9 @@
 // pnp-inference-server: serves the promoted policy from the store (PolicyService): the
 // hierarchy (choreographer + experts) or, with --policy e2e, the end-to-end baseline.
 //   --address 127.0.0.1:50060  --db FILE (or $PNP_DB; an existing store unless --create-db)
-//   --reload-ms 500
+//   --reload-ms 500 (how often --db is read for new promotions)
+//   or --store host:port (pnp-store-server, whose WatchPromotions stream says when to reload;
+//   [--store-tls-ca FILE ...])
 //   --policy hierarchy|e2e  [--metrics-address 127.0.0.1:9101]
 //   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
 //   (docs/RELIABILITY.md, "Who may do what"; operator calls are audited into --db)
@@ -10,6 +12,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <exception>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +24,9 @@
 #include "services/common/server_runtime.h"
 #include "services/common/store_path.h"
 #include "services/inference/policy_service.h"
+#include "services/inference/promotion_watcher.h"
+#include "services/store/remote_store.h"
+#include "services/store/store_flags.h"
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
@@ -35,7 +42,10 @@ int main(int argc, char** argv) {
   std::string metrics_address;
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
-  app.add_option("--db", db, "SQLite store [$PNP_DB]; it must exist unless --create-db");
+  auto* db_option =
+      app.add_option("--db", db, "SQLite store [$PNP_DB]; it must exist unless --create-db");
+  RemoteStoreFlags store_flags;
+  add_remote_store_flags(app, store_flags, db_option);
   app.add_flag("--create-db", create_db, "start on an empty store if --db does not exist");
   app.add_option("--reload-ms", reload_ms, "how often to look for newly promoted checkpoints")
       ->check(CLI::Range(10, 60'000))
@@ -57,14 +67,41 @@ int main(int argc, char** argv) {
     MetricsRegistry metrics;
     const auto kind = pnp::serving::parse_policy_kind(policy, "--policy");
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
-    const std::string store = resolve_store_path(db, !create_db);
+    const bool remote = !store_flags.address.empty();
+    const std::string store = remote ? "" : resolve_store_path(db, !create_db);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "inference");
-    PolicyServiceImpl service(store, kind, &limits, metrics_address.empty() ? nullptr : &metrics);
-    const auto audit = open_audit_trail(store, "inference");
+    MetricsRegistry* const served_metrics = metrics_address.empty() ? nullptr : &metrics;
+    const auto service =
+        remote ? std::make_unique<PolicyServiceImpl>(
+                     remote_store_opener(store_flags.address, store_flags.tls), kind, &limits,
+                     served_metrics)
+               : std::make_unique<PolicyServiceImpl>(store, kind, &limits, served_metrics);
+    // With a remote store the audit goes to the JSON log only (its trail is a table of the
+    // store's file, which this server does not open).
+    const auto audit = remote ? nullptr : open_audit_trail(store, "inference");
     security.audit = audit.get();
+    const auto reload = [&service] {
+      try {
+        if (service->reload()) log_event("inference", "reloaded");
+      } catch (const pnp::Error& e) {
+        if (e.code() != pnp::ErrorCode::kFailedPrecondition)
+          log_event("inference", "reload_failed", {{"error", e.what()}});
+      } catch (const std::exception& e) {  // keeps serving the current policy
+        log_event("inference", "reload_failed", {{"error", e.what()}});
+      }
+    };
+    std::optional<PromotionWatcher> watcher;
+    if (remote) {
+      auto watch_store = std::make_unique<RemoteStore>(
+          dial(store_flags.address, store_flags.tls, store_channel_arguments()),
+          store_flags.address);
+      watcher.emplace(std::move(watch_store), reload, [](const std::string& message) {
+        log_event("inference", "store_watch", {{"message", message}});
+      });
+    }
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 4 << 20,
-                           .services = {&service},
+                           .services = {service.get()},
                            .service_names = {"pnp.policy.v1.PolicyService"},
                            // Interceptors cost every call: only when someone can scrape.
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
@@ -84,22 +121,19 @@ int main(int argc, char** argv) {
     return serve_until_terminated(
         runtime, "inference",
         [&] {
-          const auto stats = service.batch_stats();
+          const auto stats = service->batch_stats();
           for (std::size_t k = 0; k < stats.size() && k < batches.size(); ++k) {
             batched_requests[k]->Set(static_cast<double>(stats[k].requests));
             batches[k]->Set(static_cast<double>(stats[k].batches));
           }
-          try {
-            if (service.reload()) log_event("inference", "reloaded");
-          } catch (const pnp::Error& e) {
-            if (e.code() != pnp::ErrorCode::kFailedPrecondition)
-              log_event("inference", "reload_failed", {{"error", e.what()}});
-          } catch (const std::exception& e) {  // keeps serving the current policy
-            log_event("inference", "reload_failed", {{"error", e.what()}});
-          }
+          if (!remote) reload();  // a remote store's promotions come by its watcher
         },
         std::chrono::milliseconds(reload_ms),
-        {{"db", db}, {"policy", policy}, {"ready", service.ready()}, {"gemm_path", gemm_path}});
+        {{"db", db},
+         {"store", store_flags.address},
+         {"policy", policy},
+         {"ready", service->ready()},
+         {"gemm_path", gemm_path}});
   } catch (const pnp::Error& e) {
     log_event("inference", "fatal", {{"error", e.what()}});
     return 1;

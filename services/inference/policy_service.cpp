@@ -7,6 +7,7 @@
 #include "services/common/access_control.h"
 #include "services/common/convert.h"
 #include "services/common/status.h"
+#include "store/run_store.h"
 #include "store/schema.h"
 
 namespace pnp::services {
@@ -36,14 +37,15 @@ namespace {
 // The serving connection is read-only: serving never writes, and a store on a read-only
 // file (or a replica's copy) is served. A new file (--create-db) or an older schema is
 // first set up read-write, once.
-store::RunStore open_for_serving(const std::string& path) {
-  if (path == ":memory:") return store::RunStore(path);
+std::unique_ptr<store::Store> open_for_serving(const std::string& path) {
+  if (path == ":memory:") return std::make_unique<store::RunStore>(path);
   const bool current = std::filesystem::exists(path) && [&] {
     store::Database probe(path, {.access = store::Access::kReadOnly});
     return probe.pragma_int("user_version") >= store::schema_version();
   }();
   if (!current) store::RunStore migrate_once(path);
-  return store::RunStore(path, {.access = store::Access::kReadOnly});
+  return std::make_unique<store::RunStore>(
+      path, store::DatabaseOptions{.access = store::Access::kReadOnly});
 }
 
 // 50 us to 1 s, with 2 ms a bound: the alert on a 2 ms p99 reads an exact bucket.
@@ -57,8 +59,21 @@ const std::vector<double>& session_step_bounds() {
 
 PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::PolicyKind kind,
                                      StreamLimits* limits, MetricsRegistry* metrics)
+    : PolicyServiceImpl([db_path] { return open_for_serving(db_path); },
+                        [db_path]() -> std::unique_ptr<store::Store> {
+                          return std::make_unique<store::RunStore>(db_path);
+                        },
+                        kind, limits, metrics) {}
+
+PolicyServiceImpl::PolicyServiceImpl(store::StoreOpener open_store, serving::PolicyKind kind,
+                                     StreamLimits* limits, MetricsRegistry* metrics)
+    : PolicyServiceImpl(open_store, open_store, kind, limits, metrics) {}
+
+PolicyServiceImpl::PolicyServiceImpl(store::StoreOpener open_reader, store::StoreOpener open_writer,
+                                     serving::PolicyKind kind, StreamLimits* limits,
+                                     MetricsRegistry* metrics)
     : kind_(kind),
-      db_path_(db_path),
+      open_writer_(std::move(open_writer)),
       limits_(limits),
       session_step_seconds_(
           metrics ? &metrics->histogram("pnp_inference_session_step_seconds",
@@ -66,7 +81,7 @@ PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::Policy
                                         "its request read to its answer written, in seconds.",
                                         session_step_bounds())
                   : nullptr),
-      store_(open_for_serving(db_path)) {
+      store_(open_reader()) {
   try {
     reload();
   } catch (const Error& e) {
@@ -81,14 +96,14 @@ PolicyServiceImpl::PolicyServiceImpl(const std::string& db_path, serving::Policy
 
 bool PolicyServiceImpl::reload() {
   std::lock_guard lock(store_mutex_);
-  // One snapshot for the promotions and the checkpoints they name: a promotion committed
-  // meanwhile is seen whole at the next reload, never half now.
-  store::ReadTransaction snapshot(store_.database());
-  const auto ids = serving::promoted_checkpoint_ids(store_, kind_);
+  // One consistent set of promotions (a promotion of several roles is seen whole or not
+  // at all), then the checkpoints it names, which never change once written.
+  const std::vector<store::Promotion> promotions = store_->promotions();
+  const auto ids = serving::promoted_checkpoint_ids(promotions, kind_);
   const auto current = served_.load();
   if (ids && current && current->checkpoint_ids() == *ids) return false;
   try {
-    auto next = serving::load_promoted(store_, kind_);
+    auto next = serving::load_promoted(*store_, promotions, kind_);
     served_.store(std::move(next));
     load_error_.clear();
   } catch (const Error& e) {
@@ -183,7 +198,7 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
     }
     {
       std::lock_guard lock(store_mutex_);
-      if (!writer_) writer_.emplace(db_path_);  // the one write this service makes
+      if (!writer_) writer_ = open_writer_();  // the one write this service makes
       for (const store::Promotion& promotion : writer_->promote(ids, principal_of(*context))) {
         const store::CheckpointInfo info = writer_->checkpoint_info(promotion.checkpoint_id);
         const auto latest = writer_->latest_checkpoint(info.run_id);
@@ -218,7 +233,7 @@ grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
   return guarded([&] {
     std::lock_guard lock(store_mutex_);
     // The roles of the served kind only: the others serve nothing here.
-    for (const store::Promotion& p : store_.promotions()) {
+    for (const store::Promotion& p : store_->promotions()) {
       if (!serves_role(kind_, p.role)) continue;
       auto* role = response->add_roles();
       role->set_role(role_from_name(p.role));

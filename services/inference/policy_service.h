@@ -19,7 +19,7 @@
 #include "services/common/metrics_registry.h"
 #include "services/common/stream_limits.h"
 #include "serving/served_policy.h"
-#include "store/run_store.h"
+#include "store/store.h"
 
 namespace pnp::services {
 
@@ -28,9 +28,14 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
   // `limits` (null: none) bounds the PredictSession streams; `metrics` (null: none) gets
   // pnp_inference_session_step_seconds, each session answer's time in the server (a
   // session's own RPC duration is the whole episode's). Both must outlive the service.
+  // Serves the store file at `db_path`, read in this process.
   explicit PolicyServiceImpl(const std::string& db_path,
                              serving::PolicyKind kind = serving::PolicyKind::kHierarchy,
                              StreamLimits* limits = nullptr, MetricsRegistry* metrics = nullptr);
+  // Serves the store `open_store` opens (pnp-store-server: remote_store_opener); one handle
+  // reads, another is opened at the first promotion.
+  PolicyServiceImpl(store::StoreOpener open_store, serving::PolicyKind kind,
+                    StreamLimits* limits = nullptr, MetricsRegistry* metrics = nullptr);
 
   // Loads the promoted checkpoints of the served kind if they differ from the served
   // ones; returns whether the policy changed. A failure keeps the current one and is
@@ -60,13 +65,16 @@ class PolicyServiceImpl final : public policy::v1::PolicyService::Service {
  private:
   std::shared_ptr<const serving::ServedPolicy> served_or_unavailable();
 
+  PolicyServiceImpl(store::StoreOpener open_reader, store::StoreOpener open_writer,
+                    serving::PolicyKind kind, StreamLimits* limits, MetricsRegistry* metrics);
+
   const serving::PolicyKind kind_;
-  const std::string db_path_;
+  const store::StoreOpener open_writer_;
   StreamLimits* const limits_;
   Histogram* const session_step_seconds_;  // null: not recorded
   std::mutex store_mutex_;  // guards both connections: each is used by one thread at a time
-  store::RunStore store_;   // read-only: serving
-  std::optional<store::RunStore> writer_;  // opened at the first promotion
+  std::unique_ptr<store::Store> store_;   // serving's reads (read-only on a local file)
+  std::unique_ptr<store::Store> writer_;  // opened at the first promotion
   std::string load_error_;  // why the last load failed (empty: it did not); store_mutex_
   SharedSnapshot<serving::ServedPolicy> served_;
 };

@@ -1,6 +1,7 @@
 // pnp-train-server: trains one role (TrainingService) in the background, writing runs,
 // learning curves and checkpoints to the store; resumes interrupted runs at start.
 //   --role approach  --address 127.0.0.1:50052  --db FILE (or $PNP_DB; created if missing)
+//   or --store host:port (pnp-store-server; [--store-tls-ca FILE ...])
 //   --threads 0
 //   [--metrics-address 127.0.0.1:9102]  [--sim-address host:port]...  (rollouts on remote
 //   simulation services, round robin; default: in this process)
@@ -23,6 +24,8 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/store_path.h"
+#include "services/store/remote_store.h"
+#include "services/store/store_flags.h"
 #include "services/train/training_service.h"
 
 namespace {
@@ -85,7 +88,9 @@ int main(int argc, char** argv) {
   app.add_option("--role", role, "approach, manipulate, retract, hlc or e2e")->required();
   app.add_option("--address", address,
                  "host:port to listen on (port 0: any free port) [127.0.0.1:5005x by role]");
-  app.add_option("--db", db, "SQLite store, created if missing [$PNP_DB]");
+  auto* db_option = app.add_option("--db", db, "SQLite store, created if missing [$PNP_DB]");
+  RemoteStoreFlags store_flags;
+  add_remote_store_flags(app, store_flags, db_option);
   app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
   std::vector<std::string> sim_addresses;
   app.add_option("--sim-address", sim_addresses,
@@ -129,7 +134,11 @@ int main(int argc, char** argv) {
     // Before anything is created or resumed: a refused flag leaves nothing behind.
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     validate(sim_tls);
-    db = resolve_store_path(db, false);
+    pnp::store::StoreOpener open_store;
+    if (store_flags.address.empty())
+      db = resolve_store_path(db, false);
+    else
+      open_store = remote_store_opener(store_flags.address, store_flags.tls);
     MetricsRegistry metrics;
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {
@@ -149,7 +158,10 @@ int main(int argc, char** argv) {
     options.log = [name](const std::string& line) {
       log_event(name, "store", {{"message", line}});
     };
-    const auto audit = open_audit_trail(db, name);
+    options.open_store = open_store;
+    // With a remote store the audit goes to the JSON log only (the trail is a table of the
+    // store's file, which this server does not open).
+    const auto audit = store_flags.address.empty() ? open_audit_trail(db, name) : nullptr;
     security.audit = audit.get();
     pnp::training::RunManager manager(options);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), name);
@@ -179,6 +191,7 @@ int main(int argc, char** argv) {
     };
     return serve_until_terminated(runtime, name, periodic, std::chrono::milliseconds(1000),
                                   {{"db", db},
+                                   {"store", store_flags.address},
                                    {"role", role},
                                    {"owner", manager.owner()},
                                    {"sim_addresses", sim_addresses},

@@ -20,6 +20,7 @@
 #include "services/inference/policy_service.h"
 #include "services/robot_sim/robot_controller_service.h"
 #include "sim/panda_hand.h"
+#include "store/run_store.h"
 #include "support/checked_in_hierarchy.h"
 
 namespace pnp::gateway {

@@ -75,7 +75,7 @@ std::vector<char*> pointers(std::vector<std::string>& strings) {
 // In the child between fork and exec: async-signal-safe calls only. Reports exec's errno
 // on `status_fd` (close-on-exec, so a successful exec just closes it).
 [[noreturn]] void exec_child(char** argv, char** envp, int in, int out, int err, int status_fd,
-                             pid_t parent) {
+                             pid_t parent, const char* working_dir) {
   sigset_t none;
   sigemptyset(&none);
   sigprocmask(SIG_SETMASK, &none, nullptr);
@@ -86,6 +86,7 @@ std::vector<char*> pointers(std::vector<std::string>& strings) {
   if (::dup2(in, STDIN_FILENO) < 0 || ::dup2(out, STDOUT_FILENO) < 0 ||
       ::dup2(err, STDERR_FILENO) < 0)
     ::_exit(126);
+  if (working_dir && ::chdir(working_dir) != 0) ::_exit(126);
   ::execve(argv[0], argv, envp);
   const int error = errno;
   [[maybe_unused]] const ssize_t written = ::write(status_fd, &error, sizeof error);
@@ -102,7 +103,8 @@ std::string ExitStatus::describe() const {
 
 ChildProcess::ChildProcess(std::string name, std::vector<std::string> args,
                            const std::filesystem::path& log_dir,
-                           const std::vector<std::pair<std::string, std::string>>& env)
+                           const std::vector<std::pair<std::string, std::string>>& env,
+                           const std::filesystem::path& working_dir)
     : name_(std::move(name)),
       stdout_path_(log_dir / (name_ + ".stdout")),
       stderr_path_(log_dir / (name_ + ".stderr")) {
@@ -120,11 +122,12 @@ ChildProcess::ChildProcess(std::string name, std::vector<std::string> args,
   UniqueFd status_read(status_pipe[0]);
   UniqueFd status_write(status_pipe[1]);
   const pid_t parent = ::getpid();
+  const std::string cwd = working_dir.string();
   pid_ = ::fork();
   if (pid_ < 0) throw std::system_error(errno, std::generic_category(), "fork");
   if (pid_ == 0)
-    exec_child(argv.data(), envp.data(), in.get(), out.get(), err.get(), status_write.get(),
-               parent);
+    exec_child(argv.data(), envp.data(), in.get(), out.get(), err.get(), status_write.get(), parent,
+               cwd.empty() ? nullptr : cwd.c_str());
   status_write.reset();
   int exec_errno = 0;
   ssize_t got = 0;

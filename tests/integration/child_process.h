@@ -34,11 +34,13 @@ struct ExitStatus {
 class ChildProcess {
  public:
   // Starts args[0] (a path) with `args`, in the parent's environment plus `env`
-  // (NAME, VALUE; these win). stdout and stderr go to <log_dir>/<name>.stdout and
-  // .stderr. Throws std::runtime_error if the program cannot be started.
+  // (NAME, VALUE; these win), in `working_dir` (empty: the parent's). stdout and stderr go
+  // to <log_dir>/<name>.stdout and .stderr. Throws std::runtime_error if the program cannot
+  // be started.
   ChildProcess(std::string name, std::vector<std::string> args,
                const std::filesystem::path& log_dir,
-               const std::vector<std::pair<std::string, std::string>>& env = {});
+               const std::vector<std::pair<std::string, std::string>>& env = {},
+               const std::filesystem::path& working_dir = {});
   // SIGKILL and reap if still running.
   ~ChildProcess();
   ChildProcess(const ChildProcess&) = delete;

@@ -64,9 +64,12 @@ tv1::CreateTrainingRunRequest endless_run() {
 class Trainer {
  public:
   // A short lease: a killed server's run is taken over (or resumed) within a second.
-  // `extra`: more flags (--sim-address ...).
-  Trainer(const TempDir& dir, const std::string& name, const std::vector<std::string>& extra = {})
-      : process_(name, args(dir, extra), dir.path()), port_(process_.port()) {
+  // `extra`: more flags (--sim-address ...). `store`: where the store is (default: --db
+  // pnp.db in `dir`); `working_dir`: the server's own (empty: the test's).
+  Trainer(const TempDir& dir, const std::string& name, const std::vector<std::string>& extra = {},
+          std::vector<std::string> store = {}, const std::filesystem::path& working_dir = {})
+      : process_(name, args(dir, extra, std::move(store)), dir.path(), {}, working_dir),
+        port_(process_.port()) {
     if (port_ > 0) {
       stub_ = tv1::TrainingService::NewStub(
           grpc::CreateChannel(loopback(port_), grpc::InsecureChannelCredentials()));
@@ -115,18 +118,19 @@ class Trainer {
   }
 
  private:
-  static std::vector<std::string> args(const TempDir& dir, const std::vector<std::string>& extra) {
+  static std::vector<std::string> args(const TempDir& dir, const std::vector<std::string>& extra,
+                                       std::vector<std::string> store) {
+    if (store.empty()) store = {"--db", dir.file("pnp.db")};
     std::vector<std::string> a = {std::string(PNP_BIN_DIR) + "/pnp-train-server",
                                   "--role",
                                   "approach",
                                   "--address",
                                   "127.0.0.1:0",
-                                  "--db",
-                                  dir.file("pnp.db"),
                                   "--threads",
                                   "1",
                                   "--run-lease-s",
                                   "1"};
+    a.insert(a.end(), store.begin(), store.end());
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
   }
@@ -372,12 +376,15 @@ std::string owner_of(const std::string& db, std::int64_t run_id) {
   return StoreReader(db).text("SELECT COALESCE(owner, '') FROM runs WHERE id = ?", {run_id});
 }
 
-TEST(RunOwnership, TwoServersOfARoleNeverShareARunAndASurvivorTakesOverAKilledOnesRun) {
-  TempDir dir("two_trainers");
-  const std::string db = dir.file("pnp.db");
-  std::optional<Trainer> a(std::in_place, dir, "train-a");
+// Two trainers of one role, made by `start(name)`, on the store file `db`: each trains its
+// own run; after one is SIGKILLed, the survivor takes over its run.
+void two_trainers_share_runs_and_a_survivor_takes_over(
+    const std::string& db,
+    const std::function<std::unique_ptr<Trainer>(const std::string&)>& start) {
+  std::unique_ptr<Trainer> a = start("train-a");
   ASSERT_TRUE(a->started()) << a->process().diagnostics();
-  Trainer b(dir, "train-b");
+  std::unique_ptr<Trainer> b_owner = start("train-b");
+  Trainer& b = *b_owner;
   ASSERT_TRUE(b.started()) << b.process().diagnostics();
   const std::int64_t first = a->create(endless_run()).run_id();
   const std::int64_t second = a->create(endless_run()).run_id();
@@ -426,6 +433,36 @@ TEST(RunOwnership, TwoServersOfARoleNeverShareARunAndASurvivorTakesOverAKilledOn
   EXPECT_EQ(store.text("PRAGMA integrity_check"), "ok");
   expect_one_trainer(store, first);
   expect_one_trainer(store, second);
+}
+
+TEST(RunOwnership, TwoServersOfARoleNeverShareARunAndASurvivorTakesOverAKilledOnesRun) {
+  TempDir dir("two_trainers");
+  two_trainers_share_runs_and_a_survivor_takes_over(
+      dir.file("pnp.db"),
+      [&](const std::string& name) { return std::make_unique<Trainer>(dir, name); });
+}
+
+// The same through pnp-store-server: the trainers open no file (each runs in an empty
+// directory of its own); only the store server has the database.
+TEST(RunOwnership, ThroughTheStoreServerTwoTrainersShareRunsWithNoSharedFile) {
+  TempDir dir("two_trainers_store_server");
+  std::filesystem::create_directories(dir.path() / "store");
+  const std::string db = (dir.path() / "store" / "pnp.db").string();
+  ChildProcess store_server(
+      "store",
+      {std::string(PNP_BIN_DIR) + "/pnp-store-server", "--address", "127.0.0.1:0", "--db", db},
+      dir.path(), {}, dir.path() / "store");
+  const int store_port = store_server.port();
+  ASSERT_GT(store_port, 0) << store_server.diagnostics();
+  two_trainers_share_runs_and_a_survivor_takes_over(db, [&](const std::string& name) {
+    const auto own = dir.path() / name;
+    std::filesystem::create_directories(own);
+    return std::make_unique<Trainer>(dir, name, std::vector<std::string>{},
+                                     std::vector<std::string>{"--store", loopback(store_port)},
+                                     own);
+  });
+  for (const char* name : {"train-a", "train-b"})
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path() / name)) << name << " wrote a file";
 }
 
 // Another process holds the write lock for 15 s (a backup, a long migration, an operator's

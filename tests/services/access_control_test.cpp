@@ -20,6 +20,7 @@
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "pnp/store/v1/store_service.grpc.pb.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 #include "security/rpc_access.h"
 #include "services/common/server_runtime.h"
@@ -50,7 +51,8 @@ TEST(RpcAccessTable, EveryRpcOfEveryServiceHasAClass) {
   for (const auto* linked :
        {grpc::health::v1::HealthCheckRequest::descriptor(), common::v1::Vector3::descriptor(),
         policy::v1::PredictRequest::descriptor(), robot::v1::StopRequest::descriptor(),
-        sim::v1::StepRequest::descriptor(), train::v1::TrainingRun::descriptor()})
+        sim::v1::StepRequest::descriptor(), train::v1::TrainingRun::descriptor(),
+        pnp::store::v1::GetRunRequest::descriptor()})
     ASSERT_NE(linked, nullptr);
   const auto* pool = google::protobuf::DescriptorPool::generated_pool();
   std::set<std::string> declared;

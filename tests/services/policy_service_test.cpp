@@ -17,6 +17,7 @@
 #include "serving/served_end_to_end.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
+#include "store/run_store.h"
 
 namespace pnp::services {
 namespace {

@@ -13,6 +13,7 @@
 #include "rl/expert_checkpoint.h"
 #include "services/common/server_runtime.h"
 #include "store/checkpoint_import.h"
+#include "store/run_store.h"
 #include "tests/core/training/small_runs.h"
 
 namespace pnp::services {

@@ -9,7 +9,7 @@
 
 namespace pnp::testing {
 
-inline void promote_checked_in_panda_hierarchy(store::RunStore& store) {
+inline void promote_checked_in_panda_hierarchy(store::Store& store) {
   store::import_hierarchy(store, std::filesystem::path(PNP_TEST_DATA_DIR) / "panda_block", "panda",
                           "block");
 }

@@ -33,63 +33,6 @@ TEST_F(StoreTest, OpensWithSynchronousFullIncrementalVacuumAndABoundedWal) {
   EXPECT_EQ(normal.pragma_int("synchronous"), 1);
 }
 
-TEST_F(StoreTest, AClaimGivesARunToOneOwnerUntilItsLeaseExpires) {
-  RunStore a(path_), b(path_);
-  const auto first = a.create_run(spec());
-  const auto second = a.create_run(spec());
-  a.create_run(spec("retract"));  // another role: never claimed by approach owners
-  const auto got_a = a.claim_next("approach", "server-a", 60s);
-  ASSERT_TRUE(got_a);
-  EXPECT_EQ(got_a->id, first.id) << "oldest first";
-  EXPECT_EQ(got_a->state, RunState::kRunning);
-  EXPECT_EQ(got_a->owner, "server-a");
-  const auto got_b = b.claim_next("approach", "server-b", 60s);
-  ASSERT_TRUE(got_b);
-  EXPECT_EQ(got_b->id, second.id) << "a held run is never handed out twice";
-  EXPECT_FALSE(b.claim_next("approach", "server-c", 60s));
-  EXPECT_EQ(b.count_claimable("approach", "server-c"), 0);
-
-  // Only the owner writes the run's curve, checkpoints and state.
-  const MetricPoint point{1000, 20, 1.0, 0.5, 0.5, 0.5, 0.1, 0.1, 50};
-  EXPECT_EQ(code_of([&] { b.record_evaluation(first.id, point, kBlob, false, {}, "server-b"); }),
-            ErrorCode::kAborted);
-  EXPECT_EQ(code_of([&] { b.set_state(first.id, RunState::kSucceeded, "", "server-b"); }),
-            ErrorCode::kAborted);
-  EXPECT_TRUE(b.metrics(first.id).empty()) << "a refused write leaves nothing";
-  a.record_evaluation(first.id, point, kBlob, false, {}, "server-a");
-  EXPECT_TRUE(a.renew_lease(first.id, "server-a", 60s));
-  EXPECT_FALSE(a.renew_lease(first.id, "server-b", 60s));
-
-  // A lease that has expired lets another owner take the run over; the old owner's
-  // renewals and writes are then refused.
-  EXPECT_TRUE(a.renew_lease(first.id, "server-a", 1ms));
-  std::this_thread::sleep_for(5ms);
-  const auto taken = b.claim_next("approach", "server-c", 60s);
-  ASSERT_TRUE(taken);
-  EXPECT_EQ(taken->id, first.id);
-  EXPECT_EQ(taken->owner, "server-c");
-  EXPECT_FALSE(a.renew_lease(first.id, "server-a", 60s));
-  EXPECT_EQ(code_of([&] { a.record_evaluation(first.id, point, kBlob, false, {}, "server-a"); }),
-            ErrorCode::kAborted);
-
-  // Anyone may cancel; the owner's next renewal says so; a finished run has no owner.
-  const auto cancelled = b.set_state(second.id, RunState::kCancelled);
-  EXPECT_TRUE(cancelled.owner.empty());
-  EXPECT_FALSE(b.renew_lease(second.id, "server-b", 60s));
-  // Released: another owner may take it at once.
-  b.release(first.id, "server-c");
-  EXPECT_EQ(a.claim_next("approach", "server-a", 60s)->id, first.id);
-}
-
-TEST_F(StoreTest, TheLatestCheckpointIsTheOneWithTheMostSteps) {
-  RunStore store(path_);
-  const auto run = store.create_run(spec());
-  const auto later = store.save_checkpoint(run.id, 3000, 0.5, kBlob);
-  store.save_checkpoint(run.id, 1000, 0.5, kBlob);  // written after, fewer steps
-  EXPECT_EQ(store.latest_checkpoint(run.id)->id, later.id);
-  EXPECT_EQ(store.checkpoints(run.id).back().env_steps, 3000);
-}
-
 TEST_F(StoreTest, AnOlderDatabaseIsMigratedWithItsRowsAndIdsAreNeverReused) {
   std::int64_t old_run = 0, old_checkpoint = 0;
   {
@@ -194,41 +137,6 @@ TEST_F(StoreTest, BusyIsRetriedWithBackoffUpToItsBudget) {
   }
 }
 
-TEST_F(StoreTest, APromotionOfManyIsSeenWholeByAConcurrentReader) {
-  RunStore writer(path_);
-  std::vector<std::vector<std::int64_t>> sets(2);
-  for (auto& set : sets) {
-    for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
-      const auto run = writer.create_run(spec(role));
-      set.push_back(writer.save_checkpoint(run.id, 1, 0.5, kBlob).id);
-    }
-  }
-  writer.promote(sets[0]);
-  std::atomic<bool> done{false};
-  std::atomic<int> mixed{0}, reads{0};
-  std::thread reader([&] {
-    RunStore store(path_, {.access = Access::kReadOnly});
-    while (!done) {
-      std::set<std::int64_t> seen;
-      for (const auto& p : store.promotions()) seen.insert(p.checkpoint_id);
-      const bool whole = seen == std::set<std::int64_t>(sets[0].begin(), sets[0].end()) ||
-                         seen == std::set<std::int64_t>(sets[1].begin(), sets[1].end());
-      if (!whole) ++mixed;
-      ++reads;
-    }
-  });
-  for (int round = 0; round < 200; ++round)
-    writer.promote(sets[static_cast<std::size_t>(round % 2 == 0)]);
-  done = true;
-  reader.join();
-  EXPECT_GT(reads.load(), 0);
-  EXPECT_EQ(mixed.load(), 0);
-  // Two of one role: refused, and nothing changes.
-  const std::vector<std::int64_t> twice{sets[0][0], sets[1][0]};
-  EXPECT_EQ(code_of([&] { writer.promote(twice); }), ErrorCode::kInvalidArgument);
-  EXPECT_EQ(writer.promoted("approach")->checkpoint_id, sets[0][0]);
-}
-
 TEST_F(StoreTest, AnImportIsOneTransactionAndItsConfigIsJson) {
   RunStore store(path_);
   const auto dir = dir_ / "hierarchy";
@@ -252,69 +160,6 @@ TEST_F(StoreTest, AnImportIsOneTransactionAndItsConfigIsJson) {
       store.database().prepare("SELECT COUNT(*) FROM runs WHERE NOT json_valid(config_json)");
   valid.step();
   EXPECT_EQ(valid.column_int(0), 0);
-}
-
-TEST_F(StoreTest, RetentionKeepsTheLastBestPromotedAndReferencedCheckpoints) {
-  RunStore store(path_);
-  const auto run = store.create_run(spec());
-  std::vector<CheckpointInfo> saved;
-  const double success[] = {0.1, 0.9, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7};
-  for (int k = 0; k < 8; ++k)
-    saved.push_back(store.save_checkpoint(run.id, 1000 * (k + 1), success[k], kBlob));
-  store.promote(saved[2].id);
-  RunSpec child = spec();
-  child.parent_checkpoint_id = saved[3].id;
-  store.create_run(child);
-  RunSpec chained = spec("manipulate");
-  chained.config_json = R"({"checkpoints":{"experts":[)" + std::to_string(saved[4].id) +
-                        R"(],"parent":null},"spec":{}})";
-  store.create_run(chained);
-  const GcReport report = store.prune_checkpoints(run.id, {.keep_last = 2});
-  std::set<std::int64_t> left;
-  for (const auto& c : store.checkpoints(run.id)) left.insert(c.id);
-  EXPECT_EQ(left, (std::set<std::int64_t>{saved[1].id, saved[2].id, saved[3].id, saved[4].id,
-                                          saved[6].id, saved[7].id}))
-      << "best, promoted, parent, expert of another run, and the last two";
-  EXPECT_EQ(report.checkpoints_deleted, 2);
-  EXPECT_EQ(report.bytes_deleted, 8);
-  EXPECT_EQ(store.latest_checkpoint(run.id)->id, saved[7].id);
-  EXPECT_EQ(code_of([&] { store.prune_checkpoints(run.id, {.keep_last = 0}); }),
-            ErrorCode::kInvalidArgument);
-  EXPECT_EQ(store.collect_garbage({.keep_last = 2}).checkpoints_deleted, 0);
-}
-
-TEST_F(StoreTest, WeightsSavedBetweenEvaluationsKeepTheirCountersAndAreNeverTheBest) {
-  RunStore store(path_);
-  const auto run = store.create_run(spec());
-  ASSERT_TRUE(store.claim_next("approach", "a", 10s));
-  const auto evaluated = store.save_checkpoint(run.id, 1000, 0.0, kBlob, "a");
-  EXPECT_FALSE(evaluated.unevaluated);
-  EXPECT_EQ(code_of([&] {
-              store.save_unevaluated(run.id, 1500, {30, 600, 9, 2}, kBlob, "b");
-            }),
-            ErrorCode::kAborted)
-      << "only the run's owner saves its weights";
-  EXPECT_EQ(code_of([&] {
-              store.save_unevaluated(run.id, 1500, {-1, 600, 9, 2}, kBlob, "a");
-            }),
-            ErrorCode::kInvalidArgument);
-  const auto stopped = store.save_unevaluated(run.id, 1500, {30, 600, 9.5, 2.25}, kBlob, "a");
-  const CheckpointInfo latest = *store.latest_checkpoint(run.id);
-  EXPECT_EQ(latest.id, stopped.id);
-  EXPECT_EQ(latest.env_steps, 1500);
-  ASSERT_TRUE(latest.unevaluated);
-  EXPECT_EQ(latest.unevaluated->episodes, 30);
-  EXPECT_EQ(latest.unevaluated->updates, 600);
-  EXPECT_EQ(latest.unevaluated->wall_s, 9.5);
-  EXPECT_EQ(latest.unevaluated->eval_wall_s, 2.25);
-  EXPECT_EQ(store.load_checkpoint(stopped.id).blob, kBlob);
-  // Retention: the evaluated checkpoint stays the run's best although the unevaluated ones
-  // tie with it (success 0) and are later; keep_last 1 keeps the latest.
-  store.save_unevaluated(run.id, 1600, {31, 610, 10, 2.25}, kBlob, "a");
-  store.prune_checkpoints(run.id, {.keep_last = 1});
-  std::set<std::int64_t> left;
-  for (const auto& c : store.checkpoints(run.id)) left.insert(c.id);
-  EXPECT_EQ(left, (std::set<std::int64_t>{evaluated.id, store.latest_checkpoint(run.id)->id}));
 }
 
 TEST_F(StoreTest, GarbageCollectionShrinksAFileCreatedWithoutIncrementalVacuum) {

@@ -1,6 +1,7 @@
 #pragma once
 // The store tests' fixture: a fresh database file per test, removed afterwards (with its
-// WAL files), a run spec, and the error code a call throws.
+// WAL files), a run spec, and the error code a call throws (also used by the Store
+// contract suite, tests/store_contract/).
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -14,6 +15,30 @@
 
 namespace pnp::store {
 
+// A run spec of `role`, as the store tests create runs.
+inline RunSpec test_spec(const std::string& role = "approach") {
+  RunSpec s;
+  s.role = role;
+  s.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
+  s.robot = "fetch";
+  s.object = "block";
+  s.seed = 7;
+  s.config_json = R"({"batch_size":256})";
+  s.code_commit = "abc123";
+  return s;
+}
+
+// The code of the pnp::Error `f` throws (a test failure if it throws none).
+inline ErrorCode error_code_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  ADD_FAILURE() << "no error";
+  return ErrorCode::kInternal;
+}
+
 class StoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -26,27 +51,8 @@ class StoreTest : public ::testing::Test {
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
-  static RunSpec spec(const std::string& role = "approach") {
-    RunSpec s;
-    s.role = role;
-    s.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
-    s.robot = "fetch";
-    s.object = "block";
-    s.seed = 7;
-    s.config_json = R"({"batch_size":256})";
-    s.code_commit = "abc123";
-    return s;
-  }
-
-  static ErrorCode code_of(const std::function<void()>& f) {
-    try {
-      f();
-    } catch (const Error& e) {
-      return e.code();
-    }
-    ADD_FAILURE() << "no error";
-    return ErrorCode::kInternal;
-  }
+  static RunSpec spec(const std::string& role = "approach") { return test_spec(role); }
+  static ErrorCode code_of(const std::function<void()>& f) { return error_code_of(f); }
 
   std::filesystem::path dir_;
   std::string path_;

@@ -1,0 +1,61 @@
+// pnp-store-server: the one process that opens the platform's SQLite store, serving it as
+// pnp.store.v1.StoreService to servers on other machines (services/store/remote_store.h).
+//   --address 127.0.0.1:50050  --db FILE (or $PNP_DB; created and migrated if needed)
+//   [--metrics-address 127.0.0.1:9100]
+//   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <string>
+
+#include "common/error.h"
+#include "services/common/address.h"
+#include "services/common/metrics_registry.h"
+#include "services/common/security_flags.h"
+#include "services/common/server_runtime.h"
+#include "services/common/store_path.h"
+#include "services/store/checkpoint_chunks.h"
+#include "services/store/store_service.h"
+
+int main(int argc, char** argv) {
+  using namespace pnp::services;
+  catch_termination_signals();
+  CLI::App app{"Serve the platform's store to the other servers", "pnp-store-server"};
+  std::string address = "127.0.0.1:50050";
+  std::string db;
+  app.add_option("--address", address, "host:port to listen on (port 0: any free port)")
+      ->capture_default_str();
+  std::string metrics_address;
+  app.add_option("--metrics-address", metrics_address,
+                 "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
+  app.add_option("--db", db, "SQLite store [$PNP_DB]; created if it does not exist");
+  ServerSecurityFlags security_flags;
+  add_server_security_flags(app, security_flags);
+  StreamLimitOptions limit_options;
+  double idle_timeout_s = 0;
+  add_stream_limit_flags(app, limit_options, idle_timeout_s);
+  CLI11_PARSE(app, argc, argv);
+  try {
+    validate_address(address, "--address");  // before the file is created
+    MetricsRegistry metrics;
+    ServerSecurity security = load_server_security(security_flags, address, metrics_address);
+    const std::string store = resolve_store_path(db, /*must_exist=*/false);
+    StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "store");
+    StoreServiceImpl service(store, &limits);
+    const auto audit = open_audit_trail(store, "store");
+    security.audit = audit.get();
+    ServerRuntime runtime({.address = address,
+                           .max_message_bytes = kStoreMessageBytes,
+                           .services = {&service},
+                           .service_names = {"pnp.store.v1.StoreService"},
+                           .metrics = metrics_address.empty() ? nullptr : &metrics,
+                           .metrics_address = metrics_address,
+                           .security = security,
+                           .log_name = "store"});
+    return serve_until_terminated(runtime, "store", [] {}, std::chrono::seconds(1),
+                                  {{"db", store}});
+  } catch (const pnp::Error& e) {
+    log_event("store", "fatal", {{"error", e.what()}});
+    return 1;
+  }
+}

@@ -1,0 +1,388 @@
+#include "services/store/store_service.h"
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/checksum.h"
+#include "common/error.h"
+#include "services/common/status.h"
+#include "services/store/checkpoint_chunks.h"
+#include "services/store/store_convert.h"
+
+namespace pnp::services {
+namespace {
+
+using std::chrono::milliseconds;
+
+// A promotion written by another process on the same file reaches the watchers within this.
+constexpr milliseconds kWatchRecheck{1000};
+// How often a waiting watch looks at its caller (cancelled) and at shutdown.
+constexpr milliseconds kWatchPoll{100};
+
+void fill(const std::vector<store::Promotion>& promotions, store_v1::PromotionsResponse& out) {
+  out.clear_promotions();
+  for (const auto& p : promotions) to_proto(p, *out.add_promotions());
+}
+
+bool same(const std::vector<store::Promotion>& a, const std::vector<store::Promotion>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (a[k].role != b[k].role || a[k].checkpoint_id != b[k].checkpoint_id ||
+        a[k].promoted_ms != b[k].promoted_ms)
+      return false;
+  }
+  return true;
+}
+
+std::optional<long long> optional_steps(bool has, std::int64_t steps) {
+  return has ? std::optional<long long>(steps) : std::nullopt;
+}
+
+}  // namespace
+
+StoreServiceImpl::StoreServiceImpl(const std::string& path, StreamLimits* limits,
+                                   store::DatabaseOptions options)
+    : connections_(path, options), limits_(limits) {}
+
+grpc::Status StoreServiceImpl::CreateRun(grpc::ServerContext*,
+                                         const store_v1::CreateRunRequest* request,
+                                         store_v1::RunResponse* response) {
+  return guarded([&] {
+    to_proto(connections_.borrow()->create_run(from_proto(request->spec())),
+             *response->mutable_run());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::GetRun(grpc::ServerContext*, const store_v1::GetRunRequest* request,
+                                      store_v1::RunResponse* response) {
+  return guarded([&] {
+    to_proto(connections_.borrow()->get_run(request->run_id()), *response->mutable_run());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ListRuns(grpc::ServerContext*,
+                                        const store_v1::ListRunsRequest* request,
+                                        store_v1::ListRunsResponse* response) {
+  return guarded([&] {
+    for (const auto& run : connections_.borrow()->list_runs(from_proto(*request)))
+      to_proto(run, *response->add_runs());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::SetRunState(grpc::ServerContext*,
+                                           const store_v1::SetRunStateRequest* request,
+                                           store_v1::RunResponse* response) {
+  return guarded([&] {
+    const store::RunState state = store::parse_run_state(request->state(), "state");
+    to_proto(connections_.borrow()->set_state(request->run_id(), state, request->error(),
+                                              request->owner()),
+             *response->mutable_run());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ClaimNextRun(grpc::ServerContext*,
+                                            const store_v1::ClaimNextRunRequest* request,
+                                            store_v1::ClaimNextRunResponse* response) {
+  return guarded([&] {
+    const auto lease = lease_from_proto(request->lease_ms(), "lease_ms");
+    if (auto run = connections_.borrow()->claim_next(request->role(), request->owner(), lease))
+      to_proto(*run, *response->mutable_run());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::RenewLease(grpc::ServerContext*,
+                                          const store_v1::RenewLeaseRequest* request,
+                                          store_v1::RenewLeaseResponse* response) {
+  return guarded([&] {
+    const auto lease = lease_from_proto(request->lease_ms(), "lease_ms");
+    response->set_renewed(
+        connections_.borrow()->renew_lease(request->run_id(), request->owner(), lease));
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ReleaseRun(grpc::ServerContext*,
+                                          const store_v1::ReleaseRunRequest* request,
+                                          store_v1::ReleaseRunResponse*) {
+  return guarded([&] {
+    connections_.borrow()->release(request->run_id(), request->owner());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::CountClaimable(grpc::ServerContext*,
+                                              const store_v1::CountClaimableRequest* request,
+                                              store_v1::CountClaimableResponse* response) {
+  return guarded([&] {
+    response->set_count(connections_.borrow()->count_claimable(request->role(), request->owner()));
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::RecordMetric(grpc::ServerContext*,
+                                            const store_v1::RecordMetricRequest* request,
+                                            store_v1::RecordMetricResponse*) {
+  return guarded([&] {
+    connections_.borrow()->record_metric(
+        request->run_id(), from_proto(request->point()), request->reached(),
+        optional_steps(request->has_steps_to_target(), request->steps_to_target()),
+        request->owner());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ListMetrics(grpc::ServerContext*,
+                                           const store_v1::ListMetricsRequest* request,
+                                           store_v1::ListMetricsResponse* response) {
+  return guarded([&] {
+    auto store = connections_.borrow();
+    const auto points = request->has_after_env_steps()
+                            ? store->metrics_after(request->run_id(), request->after_env_steps())
+                            : store->metrics(request->run_id());
+    for (const auto& p : points) to_proto(p, *response->add_points());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::SaveCheckpoint(
+    grpc::ServerContext*, grpc::ServerReader<store_v1::SaveCheckpointRequest>* reader,
+    store_v1::CheckpointInfo* response) {
+  return guarded([&] {
+    store_v1::SaveCheckpointRequest message;
+    if (!reader->Read(&message) || !message.has_header()) {
+      throw_invalid_argument("header", "a SaveCheckpointHeader as the first message",
+                             "a stream without one");
+    }
+    const store_v1::SaveCheckpointHeader header = message.header();
+    BlobAssembler blob("checkpoint of run " + std::to_string(header.run_id()), header.size_bytes(),
+                       header.checksum(), "header.size_bytes", "header.checksum");
+    while (reader->Read(&message)) {
+      if (!message.has_chunk()) {
+        throw_invalid_argument("chunk", "the blob's bytes after the header", "a second header");
+      }
+      blob.append(message.chunk());
+    }
+    const std::vector<std::uint8_t> bytes = blob.take();
+    auto store = connections_.borrow();
+    store::CheckpointInfo info;
+    switch (header.kind_case()) {
+      case store_v1::SaveCheckpointHeader::kEvaluated:
+        info = store->save_checkpoint(header.run_id(), header.evaluated().env_steps(),
+                                      header.evaluated().eval_success(), bytes, header.owner());
+        break;
+      case store_v1::SaveCheckpointHeader::kUnevaluated:
+        info = store->save_unevaluated(header.run_id(), header.unevaluated().env_steps(),
+                                       from_proto(header.unevaluated().counters()), bytes,
+                                       header.owner());
+        break;
+      case store_v1::SaveCheckpointHeader::kEvaluation: {
+        const auto& e = header.evaluation();
+        info = store->record_evaluation(
+            header.run_id(), from_proto(e.point()), bytes, e.reached(),
+            optional_steps(e.has_steps_to_target(), e.steps_to_target()), header.owner());
+        break;
+      }
+      default:
+        throw_invalid_argument("header.kind", "evaluated, unevaluated or evaluation", "none");
+    }
+    to_proto(info, *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::LoadCheckpoint(
+    grpc::ServerContext*, const store_v1::LoadCheckpointRequest* request,
+    grpc::ServerWriter<store_v1::LoadCheckpointResponse>* writer) {
+  return guarded([&] {
+    const store::Checkpoint checkpoint = connections_.borrow()->load_checkpoint(
+        request->checkpoint_id());  // verified against its checksum, or DATA_LOSS
+    store_v1::LoadCheckpointResponse message;
+    to_proto(checkpoint.info, *message.mutable_info());
+    if (!writer->Write(message)) return grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+    const bool sent = for_each_chunk(checkpoint.blob, [&](std::string_view chunk) {
+      message.Clear();
+      message.set_chunk(std::string(chunk));
+      return writer->Write(message);
+    });
+    return sent ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+  });
+}
+
+grpc::Status StoreServiceImpl::GetCheckpointInfo(grpc::ServerContext*,
+                                                 const store_v1::GetCheckpointInfoRequest* request,
+                                                 store_v1::CheckpointInfo* response) {
+  return guarded([&] {
+    to_proto(connections_.borrow()->checkpoint_info(request->checkpoint_id()), *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ListCheckpoints(grpc::ServerContext*,
+                                               const store_v1::ListCheckpointsRequest* request,
+                                               store_v1::ListCheckpointsResponse* response) {
+  return guarded([&] {
+    for (const auto& info : connections_.borrow()->checkpoints(request->run_id()))
+      to_proto(info, *response->add_checkpoints());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::LatestCheckpoint(grpc::ServerContext*,
+                                                const store_v1::LatestCheckpointRequest* request,
+                                                store_v1::LatestCheckpointResponse* response) {
+  return guarded([&] {
+    if (auto info = connections_.borrow()->latest_checkpoint(request->run_id()))
+      to_proto(*info, *response->mutable_checkpoint());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ImportFinished(
+    grpc::ServerContext*, grpc::ServerReader<store_v1::ImportFinishedRequest>* reader,
+    store_v1::ImportFinishedResponse* response) {
+  return guarded([&] {
+    std::vector<store::FinishedRun> runs;
+    std::optional<BlobAssembler> blob;
+    bool promote = false;
+    const auto finish_run = [&] {
+      if (blob) runs.back().blob = blob->take();
+    };
+    store_v1::ImportFinishedRequest message;
+    while (reader->Read(&message)) {
+      if (message.has_run()) {
+        finish_run();
+        const auto& run = message.run();
+        const std::string field = "runs[" + std::to_string(runs.size()) + "]";
+        if (runs.empty()) promote = run.promote();
+        blob.emplace(field, run.size_bytes(), run.checksum(), field + ".size_bytes",
+                     field + ".checksum");
+        runs.push_back({from_proto(run.spec()), {}});
+      } else {
+        if (!blob) throw_invalid_argument("run", "a run header before its chunks", "a chunk");
+        blob->append(message.chunk());
+      }
+    }
+    finish_run();
+    const auto ids = connections_.borrow()->import_finished(runs, promote);
+    if (promote) promotions_changed_.bump();
+    for (const auto id : ids) response->add_checkpoint_ids(id);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::Promote(grpc::ServerContext*,
+                                       const store_v1::PromoteRequest* request,
+                                       store_v1::PromotionsResponse* response) {
+  return guarded([&] {
+    const std::vector<std::int64_t> ids(request->checkpoint_ids().begin(),
+                                        request->checkpoint_ids().end());
+    const auto promoted = connections_.borrow()->promote(ids, request->promoted_by());
+    promotions_changed_.bump();
+    fill(promoted, *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::GetPromotion(grpc::ServerContext*,
+                                            const store_v1::GetPromotionRequest* request,
+                                            store_v1::GetPromotionResponse* response) {
+  return guarded([&] {
+    if (auto p = connections_.borrow()->promoted(request->role()))
+      to_proto(*p, *response->mutable_promotion());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ListPromotions(grpc::ServerContext*,
+                                              const store_v1::ListPromotionsRequest*,
+                                              store_v1::PromotionsResponse* response) {
+  return guarded([&] {
+    fill(connections_.borrow()->promotions(), *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::WatchPromotions(
+    grpc::ServerContext* context, const store_v1::WatchPromotionsRequest*,
+    grpc::ServerWriter<store_v1::PromotionsResponse>* writer) {
+  return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "WatchPromotions", StreamLimits::Idle::kKeep);
+    std::uint64_t seen = promotions_changed_.version();
+    std::vector<store::Promotion> sent = connections_.borrow()->promotions();
+    store_v1::PromotionsResponse message;
+    fill(sent, message);
+    if (!writer->Write(message)) return grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+    slot.touch();
+    auto last_read = std::chrono::steady_clock::now();
+    while (!context->IsCancelled() && !stopping_) {
+      const std::uint64_t now_seen = promotions_changed_.wait_past(seen, kWatchPoll);
+      const auto now = std::chrono::steady_clock::now();
+      if (now_seen == seen && now - last_read < kWatchRecheck) continue;
+      seen = now_seen;
+      last_read = now;
+      auto current = connections_.borrow()->promotions();
+      if (same(current, sent)) continue;
+      sent = std::move(current);
+      fill(sent, message);
+      if (!writer->Write(message)) break;
+      slot.touch();
+    }
+    return stopping_ ? grpc::Status(grpc::StatusCode::UNAVAILABLE, "the store server is stopping")
+                     : grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::PruneCheckpoints(grpc::ServerContext*,
+                                                const store_v1::PruneCheckpointsRequest* request,
+                                                store_v1::GcReport* response) {
+  return guarded([&] {
+    const auto policy = retention_from_proto(request->keep_last(), "keep_last");
+    to_proto(connections_.borrow()->prune_checkpoints(request->run_id(), policy), *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::CollectGarbage(grpc::ServerContext*,
+                                              const store_v1::CollectGarbageRequest* request,
+                                              store_v1::GcReport* response) {
+  return guarded([&] {
+    const auto policy = retention_from_proto(request->keep_last(), "keep_last");
+    to_proto(connections_.borrow()->collect_garbage(policy), *response);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::Backup(grpc::ServerContext* context, const store_v1::BackupRequest*,
+                                      grpc::ServerWriter<store_v1::BackupResponse>* writer) {
+  return guarded([&] {
+    // The copy is made beside the store (same file system, so it costs no network and the
+    // disk is one the operator already sizes) and removed once sent.
+    const std::string copy =
+        connections_.path() + ".backup-" +
+        std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
+    const store::BackupReport report = connections_.borrow()->backup(copy);
+    const TemporaryFile remove_when_done(copy);
+    store_v1::BackupResponse message;
+    auto& info = *message.mutable_info();
+    info.set_size_bytes(report.bytes);
+    info.set_checksum(checksum_hex(file_checksum(copy)));
+    info.set_runs(report.runs);
+    info.set_checkpoints(report.checkpoints);
+    if (!writer->Write(message)) return grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+    const bool sent = for_each_file_chunk(copy, [&](std::string_view chunk) {
+      message.Clear();
+      message.set_chunk(std::string(chunk));
+      return !context->IsCancelled() && writer->Write(message);
+    });
+    return sent ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+  });
+}
+
+}  // namespace pnp::services

@@ -1,0 +1,204 @@
+// Integration: the platform past one machine. Only pnp-store-server has the database; each
+// other server runs in an empty directory of its own and reaches the store over gRPC.
+// Inference replicas switch to a promotion made through any one of them, told by the store's
+// WatchPromotions stream; a client that balances over the replicas (round_robin, retried
+// Predict) rides out a replica killed under it; the dashboard reads the runs through it.
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "services/store/remote_store.h"
+#include "store/checkpoint_import.h"
+#include "tests/integration/child_process.h"
+#include "tests/integration/metrics_scrape.h"
+
+namespace pnp::integration {
+namespace {
+
+namespace pv1 = pnp::policy::v1;
+constexpr auto kGuard = 60s;  // failure guard on every wait, never an expectation
+
+// Predict is idempotent: retried on another replica when one is gone.
+constexpr const char* kBalancedConfig = R"({
+  "loadBalancingConfig": [{"round_robin": {}}],
+  "methodConfig": [{
+    "name": [{"service": "pnp.policy.v1.PolicyService", "method": "Predict"}],
+    "retryPolicy": {"maxAttempts": 4, "initialBackoff": "0.01s", "maxBackoff": "0.2s",
+                    "backoffMultiplier": 2, "retryableStatusCodes": ["UNAVAILABLE"]}
+  }]
+})";
+
+class Topology {
+ public:
+  explicit Topology(const std::string& name) : dir_(name) {
+    std::filesystem::create_directories(dir_.path() / "store");
+    db_ = (dir_.path() / "store" / "pnp.db").string();
+    store_ = std::make_unique<ChildProcess>(
+        "store",
+        std::vector<std::string>{PNP_BIN_DIR "/pnp-store-server", "--address", "127.0.0.1:0",
+                                 "--db", db_},
+        dir_.path(), std::vector<std::pair<std::string, std::string>>{}, dir_.path() / "store");
+    store_port_ = store_->port();
+  }
+
+  int store_port() const { return store_port_; }
+  ChildProcess& store_process() { return *store_; }
+  const TempDir& dir() const { return dir_; }
+
+  // pnp-inference-server --store, in an empty directory of its own.
+  std::unique_ptr<ChildProcess> inference(const std::string& name) {
+    const auto own = dir_.path() / name;
+    std::filesystem::create_directories(own);
+    return std::make_unique<ChildProcess>(
+        name,
+        std::vector<std::string>{PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0",
+                                 "--store", loopback(store_port_)},
+        dir_.path(), std::vector<std::pair<std::string, std::string>>{}, own);
+  }
+
+  services::RemoteStore store_client() {
+    return services::RemoteStore(
+        grpc::CreateCustomChannel(loopback(store_port_), grpc::InsecureChannelCredentials(),
+                                  services::store_channel_arguments()),
+        loopback(store_port_));
+  }
+
+ private:
+  TempDir dir_;
+  std::string db_;
+  std::unique_ptr<ChildProcess> store_;
+  int store_port_ = 0;
+};
+
+std::unique_ptr<pv1::PolicyService::Stub> policy_stub(int port) {
+  return pv1::PolicyService::NewStub(
+      grpc::CreateChannel(loopback(port), grpc::InsecureChannelCredentials()));
+}
+
+// The hlc checkpoint a replica serves (0: nothing yet, or unreachable).
+std::int64_t served_hlc(pv1::PolicyService::Stub& stub) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  pv1::GetServingStatusResponse status;
+  if (!stub.GetServingStatus(&context, {}, &status).ok() || !status.ready()) return 0;
+  for (const auto& role : status.roles())
+    if (role.role() == pnp::common::v1::ROLE_HLC) return role.checkpoint_id();
+  return 0;
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+pv1::PredictRequest a_request() {
+  pv1::PredictRequest request;
+  for (int i = 0; i < 25; ++i) request.mutable_observation()->add_values(0.1);
+  request.mutable_goal()->set_x_m(0.1);
+  request.mutable_goal()->set_y_m(0.1);
+  request.mutable_goal()->set_z_m(0.1);
+  return request;
+}
+
+TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutAKilledOne) {
+  Topology topology("store_topology_inference");
+  ASSERT_GT(topology.store_port(), 0) << topology.store_process().diagnostics();
+  const auto data = std::filesystem::path(PNP_SOURCE_DIR) / "tests" / "data" / "panda_block";
+  {
+    services::RemoteStore store = topology.store_client();
+    store::import_hierarchy(store, data, "panda", "block");
+  }
+  auto a = topology.inference("inference-a");
+  auto b = topology.inference("inference-b");
+  const int port_a = a->port(), port_b = b->port();
+  ASSERT_GT(port_a, 0) << a->diagnostics();
+  ASSERT_GT(port_b, 0) << b->diagnostics();
+  auto stub_a = policy_stub(port_a), stub_b = policy_stub(port_b);
+  ASSERT_TRUE(
+      wait_until([&] { return served_hlc(*stub_a) > 0 && served_hlc(*stub_b) > 0; }, kGuard, 20ms))
+      << a->diagnostics() << b->diagnostics();
+
+  // A new hierarchy, promoted through replica A: B switches when the store says so.
+  std::vector<std::int64_t> fresh;
+  {
+    services::RemoteStore store = topology.store_client();
+    for (const char* role : {"approach", "manipulate", "retract", "hlc"}) {
+      fresh.push_back(
+          store::import_checkpoint(store,
+                                   {role, std::string(role) == "hlc" ? "a3c" : "ddpg_her", "panda",
+                                    "block", data / (std::string(role) + ".ckpt")},
+                                   false));
+    }
+  }
+  grpc::ClientContext promote_context;
+  pv1::PromoteCheckpointRequest promote;
+  for (const auto id : fresh) promote.add_checkpoint_ids(id);
+  pv1::PromoteCheckpointResponse promoted;
+  const auto promoted_at = std::chrono::steady_clock::now();
+  ASSERT_TRUE(stub_a->PromoteCheckpoint(&promote_context, promote, &promoted).ok());
+  ASSERT_TRUE(wait_until([&] { return served_hlc(*stub_b) == fresh.back(); }, kGuard, 5ms))
+      << b->diagnostics();
+  std::printf(
+      "[ measured ] replica B served the promotion made through A after %.0f ms\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - promoted_at)
+          .count());
+  EXPECT_EQ(served_hlc(*stub_a), fresh.back());
+
+  // A client balanced over both replicas predicts while replica A is killed.
+  grpc::ChannelArguments args;
+  args.SetServiceConfigJSON(kBalancedConfig);
+  const auto balanced = pv1::PolicyService::NewStub(grpc::CreateCustomChannel(
+      "ipv4:127.0.0.1:" + std::to_string(port_a) + ",127.0.0.1:" + std::to_string(port_b),
+      grpc::InsecureChannelCredentials(), args));
+  const pv1::PredictRequest request = a_request();
+  int answers = 0, errors = 0, answers_after_kill = 0;
+  std::string first_error;
+  bool killed = false;
+  for (int k = 0; k < 600; ++k) {
+    if (k == 200) {
+      a->kill();
+      killed = true;
+    }
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+    pv1::PredictResponse response;
+    const grpc::Status status = balanced->Predict(&context, request, &response);
+    if (status.ok()) {
+      ++answers;
+      if (killed) ++answers_after_kill;
+    } else if (errors++ == 0) {
+      first_error = std::to_string(status.error_code()) + " " + status.error_message();
+    }
+  }
+  EXPECT_EQ(errors, 0) << first_error;
+  EXPECT_EQ(answers_after_kill, 400);
+  EXPECT_EQ(answers, 600);
+  // The dashboard reads the runs through the store server too.
+  const auto dashboard_dir = topology.dir().path() / "dashboard";
+  std::filesystem::create_directories(dashboard_dir);
+  ChildProcess dashboard(
+      "dashboard",
+      {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--store",
+       loopback(topology.store_port()), "--sim", "127.0.0.1:1", "--inference", loopback(port_b)},
+      topology.dir().path(), {}, dashboard_dir);
+  const int dashboard_port = dashboard.port();
+  ASSERT_GT(dashboard_port, 0) << dashboard.diagnostics();
+  const std::string runs = http_get(dashboard_port, "/api/runs");
+  EXPECT_NE(runs.find("200 OK"), std::string::npos) << runs;
+  EXPECT_EQ(count_of(runs, "\"role\":\"hlc\""), 2) << runs;  // imported, then fresh
+
+  // Nothing but the store server has a file.
+  for (const char* name : {"inference-a", "inference-b", "dashboard"})
+    EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / name)) << name;
+}
+
+}  // namespace
+}  // namespace pnp::integration
