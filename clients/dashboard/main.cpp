@@ -10,6 +10,7 @@
 #include "common/error.h"
 #include "security/auth_policy.h"
 #include "services/common/address.h"
+#include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/transport_security.h"
@@ -60,7 +61,9 @@ int main(int argc, char** argv) {
     if (store_flags.remote())
       config.open_store = services::remote_store_opener(store_flags.address, store_flags.tls);
     config.sim = services::dial(sim, tls);
-    config.inference = services::dial(inference, tls);
+    grpc::ChannelArguments replicas;
+    services::balance_over_replicas(replicas);
+    config.inference = services::dial(inference, tls, replicas);
     const dashboard::DashboardServer server(config);
     std::printf("%d\n", server.port());
     std::fflush(stdout);

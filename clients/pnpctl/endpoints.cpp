@@ -1,6 +1,7 @@
 #include "clients/pnpctl/endpoints.h"
 
 #include "common/error.h"
+#include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 
 namespace pnp::pnpctl {
@@ -31,6 +32,8 @@ const std::string& Endpoints::address_of(const std::string& service) const {
 std::shared_ptr<grpc::Channel> Endpoints::channel(const std::string& address) const {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
+  // Inference replicas are interchangeable: balanced, idempotent calls retried.
+  if (address == inference) services::balance_over_replicas(args);
   return services::dial(address, tls, args);
 }
 

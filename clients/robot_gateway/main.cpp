@@ -25,6 +25,7 @@
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
 #include "services/common/address.h"
+#include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 
@@ -113,6 +114,7 @@ int main(int argc, char** argv) {
     inference_args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 100);
     inference_args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 100);
     inference_args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 1000);
+    services::balance_over_replicas(inference_args);  // a session stays on its replica
     auto inference_channel = services::dial(inference_address, tls, inference_args);
     for (auto& [channel, address] : {std::pair{controller_channel, controller_address},
                                      std::pair{inference_channel, inference_address}}) {

@@ -8,12 +8,14 @@
 
 #include <atomic>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "services/common/replica_channel.h"
 #include "services/store/remote_store.h"
 #include "store/checkpoint_import.h"
 #include "tests/integration/child_process.h"
@@ -24,16 +26,6 @@ namespace {
 
 namespace pv1 = pnp::policy::v1;
 constexpr auto kGuard = 60s;  // failure guard on every wait, never an expectation
-
-// Predict is idempotent: retried on another replica when one is gone.
-constexpr const char* kBalancedConfig = R"({
-  "loadBalancingConfig": [{"round_robin": {}}],
-  "methodConfig": [{
-    "name": [{"service": "pnp.policy.v1.PolicyService", "method": "Predict"}],
-    "retryPolicy": {"maxAttempts": 4, "initialBackoff": "0.01s", "maxBackoff": "0.2s",
-                    "backoffMultiplier": 2, "retryableStatusCodes": ["UNAVAILABLE"]}
-  }]
-})";
 
 class Topology {
  public:
@@ -152,9 +144,10 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
           .count());
   EXPECT_EQ(served_hlc(*stub_a), fresh.back());
 
-  // A client balanced over both replicas predicts while replica A is killed.
+  // A client balanced over both replicas (as pnpctl, the gateway and the dashboard dial
+  // inference) predicts while replica A is killed.
   grpc::ChannelArguments args;
-  args.SetServiceConfigJSON(kBalancedConfig);
+  services::balance_over_replicas(args);
   const auto balanced = pv1::PolicyService::NewStub(grpc::CreateCustomChannel(
       "ipv4:127.0.0.1:" + std::to_string(port_a) + ",127.0.0.1:" + std::to_string(port_b),
       grpc::InsecureChannelCredentials(), args));
@@ -198,6 +191,114 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
   // Nothing but the store server has a file.
   for (const char* name : {"inference-a", "inference-b", "dashboard"})
     EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / name)) << name;
+}
+
+// The whole platform as separate processes, each in an empty directory of its own: the
+// store server (the only one with a file), two simulation servers, two training servers
+// of the approach role and one of each other role (all on the store server, their
+// rollouts on both simulation servers), two inference replicas; `pnpctl pipeline` trains,
+// promotes and evaluates through them, addressing each replicated tier as one target.
+TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
+  Topology topology("store_topology_pipeline");
+  ASSERT_GT(topology.store_port(), 0) << topology.store_process().diagnostics();
+  const std::string store = loopback(topology.store_port());
+  const auto own_dir = [&](const std::string& name) {
+    const auto path = topology.dir().path() / name;
+    std::filesystem::create_directories(path);
+    return path;
+  };
+  const auto start = [&](const std::string& name, std::vector<std::string> args) {
+    return std::make_unique<ChildProcess>(name, std::move(args), topology.dir().path(),
+                                          std::vector<std::pair<std::string, std::string>>{},
+                                          own_dir(name));
+  };
+  std::vector<std::unique_ptr<ChildProcess>> sims;
+  std::vector<std::string> sim_flags;
+  for (const char* name : {"sim-1", "sim-2"}) {
+    sims.push_back(start(name, {PNP_BIN_DIR "/pnp-sim-server", "--address", "127.0.0.1:0"}));
+    const int port = sims.back()->port();
+    ASSERT_GT(port, 0) << sims.back()->diagnostics();
+    sim_flags.insert(sim_flags.end(), {"--sim-address", loopback(port)});
+  }
+  std::map<std::string, std::vector<int>> trainer_ports;
+  std::vector<std::unique_ptr<ChildProcess>> trainers;
+  for (const std::string role : {"approach", "approach", "manipulate", "retract", "hlc"}) {
+    std::vector<std::string> args{PNP_BIN_DIR "/pnp-train-server",
+                                  "--role",
+                                  role,
+                                  "--address",
+                                  "127.0.0.1:0",
+                                  "--threads",
+                                  "1",
+                                  "--store",
+                                  store};
+    args.insert(args.end(), sim_flags.begin(), sim_flags.end());
+    trainers.push_back(
+        start("train-" + role + "-" + std::to_string(trainer_ports[role].size() + 1), args));
+    const int port = trainers.back()->port();
+    ASSERT_GT(port, 0) << trainers.back()->diagnostics();
+    trainer_ports[role].push_back(port);
+  }
+  auto a = topology.inference("inference-a");
+  auto b = topology.inference("inference-b");
+  ASSERT_GT(a->port(), 0) << a->diagnostics();
+  ASSERT_GT(b->port(), 0) << b->diagnostics();
+  // One target per tier: a replicated one names every replica (as a DNS name would).
+  const auto targets = [](const std::vector<int>& ports) {
+    std::string target = "ipv4:";
+    for (std::size_t k = 0; k < ports.size(); ++k)
+      target += (k ? "," : "") + std::string("127.0.0.1:") + std::to_string(ports[k]);
+    return target;
+  };
+  std::vector<std::string> args{PNP_BIN_DIR "/pnpctl",
+                                "--sim",
+                                loopback(sims[0]->port()),
+                                "--approach",
+                                targets(trainer_ports["approach"]),
+                                "--manipulate",
+                                targets(trainer_ports["manipulate"]),
+                                "--retract",
+                                targets(trainer_ports["retract"]),
+                                "--hlc",
+                                targets(trainer_ports["hlc"]),
+                                "--e2e",
+                                "127.0.0.1:1",
+                                "--inference",
+                                targets({a->port(), b->port()}),
+                                "pipeline",
+                                "--seed",
+                                "1",
+                                "--max-steps",
+                                "400",
+                                "--eval-interval",
+                                "200",
+                                "--eval-episodes",
+                                "4",
+                                "--hidden",
+                                "16,16",
+                                "--hlc-max-steps",
+                                "300",
+                                "--hlc-workers",
+                                "1",
+                                "--quiet",
+                                "--wait",
+                                "60",
+                                "--held-out-episodes",
+                                "3"};
+  ChildProcess pipeline("pnpctl-pipeline", args, topology.dir().path(), {}, own_dir("pnpctl"));
+  const auto status = pipeline.wait(300s);
+  ASSERT_TRUE(status && status->ok()) << pipeline.stdout_text() << pipeline.stderr_text();
+  EXPECT_NE(pipeline.stdout_text().find("held-out through the services"), std::string::npos)
+      << pipeline.stdout_text();
+  // Both replicas serve what the pipeline promoted.
+  auto stub_a = policy_stub(a->port()), stub_b = policy_stub(b->port());
+  EXPECT_TRUE(wait_until(
+      [&] { return served_hlc(*stub_a) > 0 && served_hlc(*stub_a) == served_hlc(*stub_b); }, kGuard,
+      20ms));
+  for (const char* name :
+       {"sim-1", "sim-2", "train-approach-1", "train-approach-2", "train-manipulate-1",
+        "train-retract-1", "train-hlc-1", "inference-a", "inference-b", "pnpctl"})
+    EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / name)) << name << " wrote a file";
 }
 
 }  // namespace
