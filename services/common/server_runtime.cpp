@@ -166,7 +166,7 @@ int wait_for_termination_signal() {
 
 int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
                            const std::function<void()>& periodic, std::chrono::milliseconds period,
-                           const nlohmann::json& fields) {
+                           const nlohmann::json& fields, const std::function<void()>& draining) {
   nlohmann::json listening = fields;
   listening["port"] = runtime.port();
   if (runtime.metrics_port() != 0) listening["metrics_port"] = runtime.metrics_port();
@@ -188,6 +188,7 @@ int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
     const int signal = wait_for_termination_signal();
     log_event(service, "draining", {{"signal", signal}});
   }
+  if (draining) draining();
   runtime.shutdown(std::chrono::seconds(5));
   log_event(service, "stopped");
   return 0;

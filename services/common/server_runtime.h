@@ -85,9 +85,12 @@ int wait_for_termination_signal();  // blocks until one arrives; the signal numb
 // and the log's "listening" event, with "metrics_port" when metrics are served),
 // runs `periodic` every `period` on a background thread until SIGTERM or SIGINT, then
 // drains the server (5 s grace) and returns 0.
+// `draining` (if set) runs once a signal has come, before the running calls are given
+// their grace: a service ends its long-lived streams there so shutdown need not wait.
 int serve_until_terminated(ServerRuntime& runtime, std::string_view service,
                            const std::function<void()>& periodic, std::chrono::milliseconds period,
-                           const nlohmann::json& fields = nlohmann::json::object());
+                           const nlohmann::json& fields = nlohmann::json::object(),
+                           const std::function<void()>& draining = {});
 
 // One JSON object per line on stderr: {"ts_ms", "service", "event", ...fields}.
 void log_event(std::string_view service, std::string_view event,

@@ -52,8 +52,11 @@ int main(int argc, char** argv) {
                            .metrics_address = metrics_address,
                            .security = security,
                            .log_name = "store"});
-    return serve_until_terminated(runtime, "store", [] {}, std::chrono::seconds(1),
-                                  {{"db", store}});
+    // The inference replicas' WatchPromotions streams end at once (they reconnect to the
+    // next store server) instead of holding the shutdown for its whole grace.
+    return serve_until_terminated(
+        runtime, "store", [] {}, std::chrono::seconds(1), {{"db", store}},
+        [&service] { service.stop_watches(); });
   } catch (const pnp::Error& e) {
     log_event("store", "fatal", {{"error", e.what()}});
     return 1;

@@ -191,6 +191,15 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
   // Nothing but the store server has a file.
   for (const char* name : {"inference-a", "inference-b", "dashboard"})
     EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / name)) << name;
+
+  // A store server that stops ends the replicas' watches itself (they reconnect to the
+  // next one), rather than leaving them to be cut at the end of its grace.
+  const auto stopped = topology.store_process().terminate_and_wait(kGuard);
+  ASSERT_TRUE(stopped && stopped->ok()) << topology.store_process().diagnostics();
+  EXPECT_TRUE(wait_until(
+      [&] { return b->stderr_text().find("the store server is stopping") != std::string::npos; },
+      kGuard, 20ms))
+      << b->diagnostics();
 }
 
 // The whole platform as separate processes, each in an empty directory of its own: the
