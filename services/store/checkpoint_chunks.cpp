@@ -29,7 +29,9 @@ BlobAssembler::BlobAssembler(std::string what, std::int64_t size_bytes, std::str
   std::transform(checksum_.begin(), checksum_.end(), checksum_.begin(), [](char c) {
     return static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   });
-  bytes_.reserve(static_cast<std::size_t>(size_bytes));
+  // What the caller declared is only a bound: memory grows with the bytes that arrive.
+  constexpr std::int64_t kReserveAtMost = 16 << 20;
+  bytes_.reserve(static_cast<std::size_t>(std::min(size_bytes, kReserveAtMost)));
 }
 
 void BlobAssembler::append(std::string_view chunk) {
