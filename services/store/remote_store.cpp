@@ -80,27 +80,21 @@ std::unique_ptr<grpc::ClientContext> RemoteStore::context(std::chrono::milliseco
 store::RunRecord RemoteStore::create_run(const store::RunSpec& spec) {
   store_v1::CreateRunRequest request;
   to_proto(spec, *request.mutable_spec());
-  store_v1::RunResponse response;
-  throw_if_error(stub_->CreateRun(context(options_.call_timeout).get(), request, &response),
-                 "store CreateRun", address_);
+  const auto response = call(&store_v1::StoreService::Stub::CreateRun, request, "store CreateRun");
   return from_proto(response.run());
 }
 
 store::RunRecord RemoteStore::get_run(std::int64_t id) {
   store_v1::GetRunRequest request;
   request.set_run_id(id);
-  store_v1::RunResponse response;
-  throw_if_error(stub_->GetRun(context(options_.call_timeout).get(), request, &response),
-                 "store GetRun", address_);
+  const auto response = call(&store_v1::StoreService::Stub::GetRun, request, "store GetRun");
   return from_proto(response.run());
 }
 
 std::vector<store::RunRecord> RemoteStore::list_runs(const store::RunFilter& filter) {
   store_v1::ListRunsRequest request;
   to_proto(filter, request);
-  store_v1::ListRunsResponse response;
-  throw_if_error(stub_->ListRuns(context(options_.call_timeout).get(), request, &response),
-                 "store ListRuns", address_);
+  const auto response = call(&store_v1::StoreService::Stub::ListRuns, request, "store ListRuns");
   std::vector<store::RunRecord> out;
   for (const auto& run : response.runs()) out.push_back(from_proto(run));
   return out;
@@ -113,9 +107,8 @@ store::RunRecord RemoteStore::set_state(std::int64_t id, store::RunState state,
   request.set_state(std::string(store::run_state_name(state)));
   request.set_error(error);
   request.set_owner(owner);
-  store_v1::RunResponse response;
-  throw_if_error(stub_->SetRunState(context(options_.call_timeout).get(), request, &response),
-                 "store SetRunState", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::SetRunState, request, "store SetRunState");
   return from_proto(response.run());
 }
 
@@ -126,9 +119,8 @@ std::optional<store::RunRecord> RemoteStore::claim_next(const std::string& role,
   request.set_role(role);
   request.set_owner(owner);
   request.set_lease_ms(lease.count());
-  store_v1::ClaimNextRunResponse response;
-  throw_if_error(stub_->ClaimNextRun(context(options_.call_timeout).get(), request, &response),
-                 "store ClaimNextRun", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::ClaimNextRun, request, "store ClaimNextRun");
   if (!response.has_run()) return std::nullopt;
   return from_proto(response.run());
 }
@@ -139,9 +131,8 @@ bool RemoteStore::renew_lease(std::int64_t run_id, const std::string& owner,
   request.set_run_id(run_id);
   request.set_owner(owner);
   request.set_lease_ms(lease.count());
-  store_v1::RenewLeaseResponse response;
-  throw_if_error(stub_->RenewLease(context(options_.call_timeout).get(), request, &response),
-                 "store RenewLease", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::RenewLease, request, "store RenewLease");
   return response.renewed();
 }
 
@@ -149,18 +140,16 @@ void RemoteStore::release(std::int64_t run_id, const std::string& owner) {
   store_v1::ReleaseRunRequest request;
   request.set_run_id(run_id);
   request.set_owner(owner);
-  store_v1::ReleaseRunResponse response;
-  throw_if_error(stub_->ReleaseRun(context(options_.call_timeout).get(), request, &response),
-                 "store ReleaseRun", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::ReleaseRun, request, "store ReleaseRun");
 }
 
 std::int64_t RemoteStore::count_claimable(const std::string& role, const std::string& owner) {
   store_v1::CountClaimableRequest request;
   request.set_role(role);
   request.set_owner(owner);
-  store_v1::CountClaimableResponse response;
-  throw_if_error(stub_->CountClaimable(context(options_.call_timeout).get(), request, &response),
-                 "store CountClaimable", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::CountClaimable, request, "store CountClaimable");
   return response.count();
 }
 
@@ -173,9 +162,8 @@ void RemoteStore::record_metric(std::int64_t run_id, const store::MetricPoint& p
   request.set_reached(reached);
   if (steps_to_target) request.set_steps_to_target(*steps_to_target);
   request.set_owner(owner);
-  store_v1::RecordMetricResponse response;
-  throw_if_error(stub_->RecordMetric(context(options_.call_timeout).get(), request, &response),
-                 "store RecordMetric", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::RecordMetric, request, "store RecordMetric");
 }
 
 std::vector<store::MetricPoint> RemoteStore::metrics(std::int64_t run_id) {
@@ -192,9 +180,8 @@ std::vector<store::MetricPoint> RemoteStore::list_metrics(std::int64_t run_id,
   store_v1::ListMetricsRequest request;
   request.set_run_id(run_id);
   if (after) request.set_after_env_steps(*after);
-  store_v1::ListMetricsResponse response;
-  throw_if_error(stub_->ListMetrics(context(options_.call_timeout).get(), request, &response),
-                 "store ListMetrics", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::ListMetrics, request, "store ListMetrics");
   std::vector<store::MetricPoint> out;
   for (const auto& p : response.points()) out.push_back(from_proto(p));
   return out;
@@ -289,9 +276,8 @@ store::Checkpoint RemoteStore::load_checkpoint(std::int64_t checkpoint_id) {
 std::optional<store::CheckpointInfo> RemoteStore::latest_checkpoint(std::int64_t run_id) {
   store_v1::LatestCheckpointRequest request;
   request.set_run_id(run_id);
-  store_v1::LatestCheckpointResponse response;
-  throw_if_error(stub_->LatestCheckpoint(context(options_.call_timeout).get(), request, &response),
-                 "store LatestCheckpoint", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::LatestCheckpoint, request, "store LatestCheckpoint");
   if (!response.has_checkpoint()) return std::nullopt;
   return from_proto(response.checkpoint());
 }
@@ -299,9 +285,8 @@ std::optional<store::CheckpointInfo> RemoteStore::latest_checkpoint(std::int64_t
 std::vector<store::CheckpointInfo> RemoteStore::checkpoints(std::int64_t run_id) {
   store_v1::ListCheckpointsRequest request;
   request.set_run_id(run_id);
-  store_v1::ListCheckpointsResponse response;
-  throw_if_error(stub_->ListCheckpoints(context(options_.call_timeout).get(), request, &response),
-                 "store ListCheckpoints", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::ListCheckpoints, request, "store ListCheckpoints");
   std::vector<store::CheckpointInfo> out;
   for (const auto& info : response.checkpoints()) out.push_back(from_proto(info));
   return out;
@@ -310,9 +295,8 @@ std::vector<store::CheckpointInfo> RemoteStore::checkpoints(std::int64_t run_id)
 store::CheckpointInfo RemoteStore::checkpoint_info(std::int64_t checkpoint_id) {
   store_v1::GetCheckpointInfoRequest request;
   request.set_checkpoint_id(checkpoint_id);
-  store_v1::CheckpointInfo response;
-  throw_if_error(stub_->GetCheckpointInfo(context(options_.call_timeout).get(), request, &response),
-                 "store GetCheckpointInfo", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::GetCheckpointInfo, request, "store GetCheckpointInfo");
   return from_proto(response);
 }
 
@@ -347,27 +331,23 @@ std::vector<store::Promotion> RemoteStore::promote(std::span<const std::int64_t>
   store_v1::PromoteRequest request;
   for (const auto id : checkpoint_ids) request.add_checkpoint_ids(id);
   request.set_promoted_by(by);
-  store_v1::PromotionsResponse response;
-  throw_if_error(stub_->Promote(context(options_.call_timeout).get(), request, &response),
-                 "store Promote", address_);
+  const auto response = call(&store_v1::StoreService::Stub::Promote, request, "store Promote");
   return promotions_from(response);
 }
 
 std::optional<store::Promotion> RemoteStore::promoted(const std::string& role) {
   store_v1::GetPromotionRequest request;
   request.set_role(role);
-  store_v1::GetPromotionResponse response;
-  throw_if_error(stub_->GetPromotion(context(options_.call_timeout).get(), request, &response),
-                 "store GetPromotion", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::GetPromotion, request, "store GetPromotion");
   if (!response.has_promotion()) return std::nullopt;
   return from_proto(response.promotion());
 }
 
 std::vector<store::Promotion> RemoteStore::promotions() {
   store_v1::ListPromotionsRequest request;
-  store_v1::PromotionsResponse response;
-  throw_if_error(stub_->ListPromotions(context(options_.call_timeout).get(), request, &response),
-                 "store ListPromotions", address_);
+  const auto response =
+      call(&store_v1::StoreService::Stub::ListPromotions, request, "store ListPromotions");
   return promotions_from(response);
 }
 
@@ -376,20 +356,16 @@ store::GcReport RemoteStore::prune_checkpoints(std::int64_t run_id,
   store_v1::PruneCheckpointsRequest request;
   request.set_run_id(run_id);
   request.set_keep_last(policy.keep_last);
-  store_v1::GcReport response;
-  throw_if_error(
-      stub_->PruneCheckpoints(context(options_.transfer_timeout).get(), request, &response),
-      "store PruneCheckpoints", address_);
+  const auto response = call(&store_v1::StoreService::Stub::PruneCheckpoints, request,
+                             "store PruneCheckpoints", options_.transfer_timeout);
   return from_proto(response);
 }
 
 store::GcReport RemoteStore::collect_garbage(const store::RetentionPolicy& policy) {
   store_v1::CollectGarbageRequest request;
   request.set_keep_last(policy.keep_last);
-  store_v1::GcReport response;
-  throw_if_error(
-      stub_->CollectGarbage(context(options_.transfer_timeout).get(), request, &response),
-      "store CollectGarbage", address_);
+  const auto response = call(&store_v1::StoreService::Stub::CollectGarbage, request,
+                             "store CollectGarbage", options_.transfer_timeout);
   return from_proto(response);
 }
 

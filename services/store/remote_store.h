@@ -15,6 +15,7 @@
 #include <string>
 
 #include "pnp/store/v1/store_service.grpc.pb.h"
+#include "services/common/status.h"
 #include "services/common/transport_security.h"
 #include "services/store/store_convert.h"
 #include "store/store.h"
@@ -104,6 +105,21 @@ class RemoteStore final : public store::Store {
 
  private:
   std::unique_ptr<grpc::ClientContext> context(std::chrono::milliseconds timeout) const;
+  // One unary call of the store service: its response, or the service's error as Error.
+  template <typename Request, typename Response>
+  Response call(grpc::Status (store_v1::StoreService::Stub::*rpc)(grpc::ClientContext*,
+                                                                  const Request&, Response*),
+                const Request& request, std::string_view what) {
+    return call(rpc, request, what, options_.call_timeout);
+  }
+  template <typename Request, typename Response>
+  Response call(grpc::Status (store_v1::StoreService::Stub::*rpc)(grpc::ClientContext*,
+                                                                  const Request&, Response*),
+                const Request& request, std::string_view what, std::chrono::milliseconds timeout) {
+    Response response;
+    throw_if_error(((*stub_).*rpc)(context(timeout).get(), request, &response), what, address_);
+    return response;
+  }
   std::vector<store::MetricPoint> list_metrics(std::int64_t run_id, std::optional<long long> after);
   store::CheckpointInfo save(const store_v1::SaveCheckpointHeader& header,
                              std::span<const std::uint8_t> blob, std::string_view what);
