@@ -7,6 +7,7 @@
 
 #include "common/checksum.h"
 #include "common/error.h"
+#include "services/common/address.h"
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
 #include "services/store/store_convert.h"
@@ -59,6 +60,7 @@ grpc::ChannelArguments store_channel_arguments() {
 
 store::StoreOpener remote_store_opener(const std::string& address, const ClientTlsFiles& tls,
                                        RemoteStoreOptions options) {
+  validate_address(address, "--store");  // the flag every caller takes it from
   std::shared_ptr<grpc::Channel> channel = dial(address, tls, store_channel_arguments());
   return [channel, address, options]() -> std::unique_ptr<store::Store> {
     return std::make_unique<RemoteStore>(channel, address, options);
