@@ -1,5 +1,6 @@
 #pragma once
-// Follows a training run through WatchTrainingRun until it ends, drawing a live progress
+// Follows a training run through WatchTrainingRun until it ends (through another replica
+// of the training service if the one watched goes away), drawing a live progress
 // bar on a terminal (one line per evaluation otherwise, e.g. in CI logs).
 
 #include <cstdio>

@@ -1,32 +1,71 @@
 #include "clients/sim_client/remote_env_factory.h"
 
+#include <exception>
+
 #include "clients/sim_client/remote_environment.h"
 #include "common/error.h"
 
 namespace pnp::sim_client {
 
-RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& addresses, sim::Robot robot,
+RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& targets, sim::Robot robot,
                                    sim::ObjectShape object, sim::WorldProfile world,
                                    const services::ClientTlsFiles& tls,
                                    std::chrono::milliseconds connect_timeout)
-    : robot_(robot), object_(object), world_(world), connect_timeout_(connect_timeout) {
-  if (addresses.empty()) {
+    : targets_(targets),
+      robot_(robot),
+      object_(object),
+      world_(world),
+      tls_(tls),
+      connect_timeout_(connect_timeout) {
+  if (targets_.empty()) {
     throw Error(ErrorCode::kInvalidArgument,
                 "sim_address: expected at least one simulation service address, got none");
   }
-  for (const std::string& address : addresses) {
-    if (address.empty())
-      throw Error(ErrorCode::kInvalidArgument, "sim_address: expected host:port, got \"\"");
-    // One channel per service, shared by its environments: their streams multiplex over
-    // one HTTP/2 connection.
-    services_.push_back({address, services::dial(address, tls)});
+  // Malformed targets are refused now; whether a name resolves is asked at each make().
+  for (const std::string& target : targets_) {
+    if (!target.starts_with("dns:")) resolve_sim_target(target);
   }
+  services::validate(tls_);
+}
+
+std::vector<SimServerAddress> RemoteEnvFactory::servers_now() const {
+  std::vector<SimServerAddress> servers;
+  for (const std::string& target : targets_) {
+    for (SimServerAddress& server : resolve_sim_target(target)) {
+      if (server.server_name.empty() || !tls_.server_name.empty())
+        server.server_name = tls_.server_name;
+      servers.push_back(std::move(server));
+    }
+  }
+  return servers;
+}
+
+std::shared_ptr<grpc::Channel> RemoteEnvFactory::channel_to(const SimServerAddress& server) const {
+  const std::lock_guard lock(channels_mutex_);
+  auto& channel = channels_[server];
+  if (!channel) {
+    services::ClientTlsFiles tls = tls_;
+    tls.server_name = server.server_name;
+    channel = services::dial(server.address, tls);
+  }
+  return channel;
 }
 
 std::unique_ptr<sim::Environment> RemoteEnvFactory::make() const {
-  const Service& service = services_[next_.fetch_add(1) % services_.size()];
-  return std::make_unique<RemoteEnvironment>(service.channel, service.address, robot_, object_,
-                                             world_, connect_timeout_);
+  const std::vector<SimServerAddress> servers = servers_now();
+  const std::size_t first = next_.fetch_add(1);
+  std::exception_ptr first_failure;
+  for (std::size_t i = 0; i < servers.size(); ++i) {
+    const SimServerAddress& server = servers[(first + i) % servers.size()];
+    try {
+      return std::make_unique<RemoteEnvironment>(channel_to(server), server.address, robot_,
+                                                 object_, world_, connect_timeout_);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kUnavailable) throw;  // includes a deadline passed
+      if (!first_failure) first_failure = std::current_exception();
+    }
+  }
+  std::rethrow_exception(first_failure);
 }
 
 }  // namespace pnp::sim_client

@@ -94,8 +94,9 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "trainer threads (0: all cores)")->capture_default_str();
   std::vector<std::string> sim_addresses;
   app.add_option("--sim-address", sim_addresses,
-                 "a simulation service to run rollouts on (repeat for several; default: rollouts "
-                 "in this process)");
+                 "simulation services to run rollouts on: host:port, dns:///host:port (every "
+                 "address the name resolves to, looked up again for each run) or "
+                 "ipv4:a:p,b:p; repeatable (default: rollouts in this process)");
   double lease_s = 10;
   app.add_option("--run-lease-s", lease_s,
                  "a run whose server stops renewing its lease for this long is taken over by "

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -20,12 +21,16 @@
 #include "store/checkpoint_import.h"
 #include "tests/integration/child_process.h"
 #include "tests/integration/metrics_scrape.h"
+#include "tests/integration/store_reader.h"
 
 namespace pnp::integration {
 namespace {
 
 namespace pv1 = pnp::policy::v1;
 constexpr auto kGuard = 60s;  // failure guard on every wait, never an expectation
+// The pipeline's runs: long enough that the approach run can be caught between evaluations.
+constexpr std::int64_t kPipelineSteps = 2000;
+constexpr std::int64_t kEvalInterval = 200;
 
 class Topology {
  public:
@@ -41,6 +46,7 @@ class Topology {
   }
 
   int store_port() const { return store_port_; }
+  const std::string& db() const { return db_; }
   ChildProcess& store_process() { return *store_; }
   const TempDir& dir() const { return dir_; }
 
@@ -74,15 +80,19 @@ std::unique_ptr<pv1::PolicyService::Stub> policy_stub(int port) {
       grpc::CreateChannel(loopback(port), grpc::InsecureChannelCredentials()));
 }
 
-// The hlc checkpoint a replica serves (0: nothing yet, or unreachable).
-std::int64_t served_hlc(pv1::PolicyService::Stub& stub) {
+// The checkpoint a replica serves for `role` (0: nothing yet, or unreachable).
+std::int64_t served_role(pv1::PolicyService::Stub& stub, pnp::common::v1::Role role) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
   pv1::GetServingStatusResponse status;
   if (!stub.GetServingStatus(&context, {}, &status).ok() || !status.ready()) return 0;
-  for (const auto& role : status.roles())
-    if (role.role() == pnp::common::v1::ROLE_HLC) return role.checkpoint_id();
+  for (const auto& served : status.roles())
+    if (served.role() == role) return served.checkpoint_id();
   return 0;
+}
+
+std::int64_t served_hlc(pv1::PolicyService::Stub& stub) {
+  return served_role(stub, pnp::common::v1::ROLE_HLC);
 }
 
 std::size_t count_of(const std::string& text, const std::string& what) {
@@ -98,6 +108,41 @@ pv1::PredictRequest a_request() {
   request.mutable_goal()->set_y_m(0.1);
   request.mutable_goal()->set_z_m(0.1);
   return request;
+}
+
+// A client balanced over the replicas on `port_a` and `port_b` (as pnpctl, the gateway
+// and the dashboard dial inference) makes 600 predictions; `kill_one` runs before the 201st.
+// None may fail: the killed replica's calls are retried on the other.
+void expect_no_error_while_a_replica_dies(int port_a, int port_b,
+                                          const std::function<void()>& kill_one) {
+  grpc::ChannelArguments args;
+  services::balance_over_replicas(args);
+  const auto balanced = pv1::PolicyService::NewStub(grpc::CreateCustomChannel(
+      "ipv4:127.0.0.1:" + std::to_string(port_a) + ",127.0.0.1:" + std::to_string(port_b),
+      grpc::InsecureChannelCredentials(), args));
+  const pv1::PredictRequest request = a_request();
+  int answers = 0, errors = 0, answers_after_kill = 0;
+  std::string first_error;
+  bool killed = false;
+  for (int k = 0; k < 600; ++k) {
+    if (k == 200) {
+      kill_one();
+      killed = true;
+    }
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+    pv1::PredictResponse response;
+    const grpc::Status status = balanced->Predict(&context, request, &response);
+    if (status.ok()) {
+      ++answers;
+      if (killed) ++answers_after_kill;
+    } else if (errors++ == 0) {
+      first_error = std::to_string(status.error_code()) + " " + status.error_message();
+    }
+  }
+  EXPECT_EQ(errors, 0) << first_error;
+  EXPECT_EQ(answers_after_kill, 400);
+  EXPECT_EQ(answers, 600);
 }
 
 TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutAKilledOne) {
@@ -146,34 +191,7 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
 
   // A client balanced over both replicas (as pnpctl, the gateway and the dashboard dial
   // inference) predicts while replica A is killed.
-  grpc::ChannelArguments args;
-  services::balance_over_replicas(args);
-  const auto balanced = pv1::PolicyService::NewStub(grpc::CreateCustomChannel(
-      "ipv4:127.0.0.1:" + std::to_string(port_a) + ",127.0.0.1:" + std::to_string(port_b),
-      grpc::InsecureChannelCredentials(), args));
-  const pv1::PredictRequest request = a_request();
-  int answers = 0, errors = 0, answers_after_kill = 0;
-  std::string first_error;
-  bool killed = false;
-  for (int k = 0; k < 600; ++k) {
-    if (k == 200) {
-      a->kill();
-      killed = true;
-    }
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
-    pv1::PredictResponse response;
-    const grpc::Status status = balanced->Predict(&context, request, &response);
-    if (status.ok()) {
-      ++answers;
-      if (killed) ++answers_after_kill;
-    } else if (errors++ == 0) {
-      first_error = std::to_string(status.error_code()) + " " + status.error_message();
-    }
-  }
-  EXPECT_EQ(errors, 0) << first_error;
-  EXPECT_EQ(answers_after_kill, 400);
-  EXPECT_EQ(answers, 600);
+  expect_no_error_while_a_replica_dies(port_a, port_b, [&] { a->kill(); });
   // The dashboard reads the runs through the store server too.
   const auto dashboard_dir = topology.dir().path() / "dashboard";
   std::filesystem::create_directories(dashboard_dir);
@@ -202,12 +220,24 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
       << b->diagnostics();
 }
 
+// The pid in a training server's owner name ("host:pid:started_ms").
+pid_t owner_pid(const std::string& owner) {
+  const auto first = owner.find(':');
+  const auto second = owner.find(':', first + 1);
+  if (first == std::string::npos || second == std::string::npos) return 0;
+  return static_cast<pid_t>(std::stol(owner.substr(first + 1, second - first - 1)));
+}
+
 // The whole platform as separate processes, each in an empty directory of its own: the
-// store server (the only one with a file), two simulation servers, two training servers
-// of the approach role and one of each other role (all on the store server, their
-// rollouts on both simulation servers), two inference replicas; `pnpctl pipeline` trains,
-// promotes and evaluates through them, addressing each replicated tier as one target.
-TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
+// store server (the only one with a file), two simulation servers (one pool target for
+// the trainers), two training servers of the approach role and one of each other role
+// (all on the store server), two inference replicas. `pnpctl pipeline` trains, promotes
+// and evaluates through them, addressing each replicated tier as one target. Mid-way
+// through the approach run, the replica that owns it is SIGKILLed: the other takes it over
+// from its last checkpoint and the pipeline goes on; its curve has every evaluation once,
+// in order. Then an inference replica is SIGKILLed under a balanced client, and a
+// promotion reaches the survivor.
+TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFileAndRidesOutKilledReplicas) {
   Topology topology("store_topology_pipeline");
   ASSERT_GT(topology.store_port(), 0) << topology.store_process().diagnostics();
   const std::string store = loopback(topology.store_port());
@@ -221,29 +251,27 @@ TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
                                           std::vector<std::pair<std::string, std::string>>{},
                                           own_dir(name));
   };
+  // One target per tier: a replicated one names every replica (as a DNS name would).
+  const auto targets = [](const std::vector<int>& ports) {
+    std::string target = "ipv4:";
+    for (std::size_t k = 0; k < ports.size(); ++k)
+      target += (k ? "," : "") + std::string("127.0.0.1:") + std::to_string(ports[k]);
+    return target;
+  };
   std::vector<std::unique_ptr<ChildProcess>> sims;
-  std::vector<std::string> sim_flags;
+  std::vector<int> sim_ports;
   for (const char* name : {"sim-1", "sim-2"}) {
     sims.push_back(start(name, {PNP_BIN_DIR "/pnp-sim-server", "--address", "127.0.0.1:0"}));
-    const int port = sims.back()->port();
-    ASSERT_GT(port, 0) << sims.back()->diagnostics();
-    sim_flags.insert(sim_flags.end(), {"--sim-address", loopback(port)});
+    sim_ports.push_back(sims.back()->port());
+    ASSERT_GT(sim_ports.back(), 0) << sims.back()->diagnostics();
   }
   std::map<std::string, std::vector<int>> trainer_ports;
   std::vector<std::unique_ptr<ChildProcess>> trainers;
   for (const std::string role : {"approach", "approach", "manipulate", "retract", "hlc"}) {
-    std::vector<std::string> args{PNP_BIN_DIR "/pnp-train-server",
-                                  "--role",
-                                  role,
-                                  "--address",
-                                  "127.0.0.1:0",
-                                  "--threads",
-                                  "1",
-                                  "--store",
-                                  store};
-    args.insert(args.end(), sim_flags.begin(), sim_flags.end());
-    trainers.push_back(
-        start("train-" + role + "-" + std::to_string(trainer_ports[role].size() + 1), args));
+    trainers.push_back(start(
+        "train-" + role + "-" + std::to_string(trainer_ports[role].size() + 1),
+        {PNP_BIN_DIR "/pnp-train-server", "--role", role, "--address", "127.0.0.1:0", "--threads",
+         "1", "--store", store, "--sim-address", targets(sim_ports), "--run-lease-s", "1"}));
     const int port = trainers.back()->port();
     ASSERT_GT(port, 0) << trainers.back()->diagnostics();
     trainer_ports[role].push_back(port);
@@ -252,16 +280,9 @@ TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
   auto b = topology.inference("inference-b");
   ASSERT_GT(a->port(), 0) << a->diagnostics();
   ASSERT_GT(b->port(), 0) << b->diagnostics();
-  // One target per tier: a replicated one names every replica (as a DNS name would).
-  const auto targets = [](const std::vector<int>& ports) {
-    std::string target = "ipv4:";
-    for (std::size_t k = 0; k < ports.size(); ++k)
-      target += (k ? "," : "") + std::string("127.0.0.1:") + std::to_string(ports[k]);
-    return target;
-  };
   std::vector<std::string> args{PNP_BIN_DIR "/pnpctl",
                                 "--sim",
-                                loopback(sims[0]->port()),
+                                targets(sim_ports),
                                 "--approach",
                                 targets(trainer_ports["approach"]),
                                 "--manipulate",
@@ -278,9 +299,9 @@ TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
                                 "--seed",
                                 "1",
                                 "--max-steps",
-                                "400",
+                                std::to_string(kPipelineSteps),
                                 "--eval-interval",
-                                "200",
+                                std::to_string(kEvalInterval),
                                 "--eval-episodes",
                                 "4",
                                 "--hidden",
@@ -289,25 +310,110 @@ TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFile) {
                                 "300",
                                 "--hlc-workers",
                                 "1",
-                                "--quiet",
                                 "--wait",
                                 "60",
                                 "--held-out-episodes",
                                 "3"};
+  // The second approach replica is paused until the first has claimed the approach run, so
+  // that the one killed is the one pnpctl watches the run through (the first of its
+  // target): the watch must move to the other replica as the run does.
+  ChildProcess& approach_1 = *trainers[0];
+  ChildProcess& approach_2 = *trainers[1];
+  approach_2.send_signal(SIGSTOP);
   ChildProcess pipeline("pnpctl-pipeline", args, topology.dir().path(), {}, own_dir("pnpctl"));
+
+  // The approach run, once it has an evaluation: SIGKILL the replica that owns it.
+  std::int64_t run_id = 0;
+  std::string owner;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const auto rows =
+            StoreReader(topology.db())
+                .rows(
+                    "SELECT id, owner FROM runs WHERE role = 'approach' AND state = 'running' AND "
+                    "(SELECT COUNT(*) FROM metrics WHERE metrics.run_id = runs.id) >= 1");
+        if (rows.empty()) return false;
+        run_id = std::stoll(rows[0][0]);
+        owner = rows[0][1];
+        return true;
+      },
+      kGuard, 5ms))
+      << pipeline.stderr_text();
+  ASSERT_EQ(owner_pid(owner), approach_1.pid()) << owner;
+  approach_2.send_signal(SIGCONT);
+  approach_1.kill();
+  const auto killed_at = std::chrono::steady_clock::now();
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const std::string now =
+            StoreReader(topology.db())
+                .text("SELECT COALESCE(owner, '') FROM runs WHERE id = ?", {run_id});
+        return !now.empty() && now != owner;
+      },
+      kGuard, 5ms));
+  std::printf("[ measured ] the other approach replica took the run over %.2f s after the kill\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count());
+
   const auto status = pipeline.wait(300s);
   ASSERT_TRUE(status && status->ok()) << pipeline.stdout_text() << pipeline.stderr_text();
   EXPECT_NE(pipeline.stdout_text().find("held-out through the services"), std::string::npos)
       << pipeline.stdout_text();
+  EXPECT_NE(pipeline.stderr_text().find("watching run " + std::to_string(run_id) + " again"),
+            std::string::npos)
+      << pipeline.stderr_text();
+  // The run finished, every evaluation once and in order, checkpoints in step order.
+  {
+    const StoreReader db(topology.db());
+    EXPECT_EQ(db.text("PRAGMA integrity_check"), "ok");
+    EXPECT_EQ(db.text("SELECT state FROM runs WHERE id = ?", {run_id}), "succeeded");
+    std::vector<std::int64_t> steps;
+    for (const auto& row :
+         db.rows("SELECT env_steps FROM metrics WHERE run_id = ? ORDER BY rowid", {run_id}))
+      steps.push_back(std::stoll(row[0]));
+    ASSERT_FALSE(steps.empty());
+    EXPECT_GE(steps.back(), kPipelineSteps);
+    // One evaluation per interval, in order (a resumed run evaluates at the first step
+    // past each boundary, which may overshoot it by part of an episode).
+    ASSERT_EQ(steps.size(), static_cast<std::size_t>(kPipelineSteps / kEvalInterval))
+        << "evaluations lost or repeated";
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      const auto boundary = static_cast<std::int64_t>(k + 1) * kEvalInterval;
+      EXPECT_TRUE(steps[k] >= boundary && steps[k] < boundary + kEvalInterval)
+          << "evaluation " << k << " of run " << run_id << " at " << steps[k] << " steps";
+    }
+    EXPECT_EQ(
+        db.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY id", {run_id}),
+        db.rows("SELECT env_steps FROM checkpoints WHERE run_id = ? ORDER BY env_steps", {run_id}));
+  }
   // Both replicas serve what the pipeline promoted.
   auto stub_a = policy_stub(a->port()), stub_b = policy_stub(b->port());
   EXPECT_TRUE(wait_until(
       [&] { return served_hlc(*stub_a) > 0 && served_hlc(*stub_a) == served_hlc(*stub_b); }, kGuard,
       20ms));
-  for (const char* name :
-       {"sim-1", "sim-2", "train-approach-1", "train-approach-2", "train-manipulate-1",
-        "train-retract-1", "train-hlc-1", "inference-a", "inference-b", "pnpctl"})
+  for (const auto& trainer : trainers) {
+    if (trainer.get() != &approach_1) {
+      EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / trainer->name()))
+          << trainer->name() << " wrote a file";
+    }
+  }
+  for (const char* name : {"sim-1", "sim-2", "inference-a", "inference-b", "pnpctl"})
     EXPECT_TRUE(std::filesystem::is_empty(topology.dir().path() / name)) << name << " wrote a file";
+
+  // A balanced client predicts while replica A is SIGKILLed; then a promotion (the
+  // approach run's first checkpoint, from before the takeover) reaches the survivor.
+  expect_no_error_while_a_replica_dies(a->port(), b->port(), [&] { a->kill(); });
+  services::RemoteStore remote = topology.store_client();
+  const auto first_checkpoint = remote.checkpoints(run_id).front().id;
+  const auto promoted_at = std::chrono::steady_clock::now();
+  remote.promote(first_checkpoint);
+  ASSERT_TRUE(wait_until(
+      [&] { return served_role(*stub_b, pnp::common::v1::ROLE_APPROACH) == first_checkpoint; },
+      kGuard, 5ms))
+      << b->diagnostics();
+  std::printf(
+      "[ measured ] the surviving replica served a promotion after %.0f ms\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - promoted_at)
+          .count());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "clients/sim_client/remote_env_factory.h"
+#include "clients/sim_client/sim_target.h"
 #include "common/error.h"
 #include "services/common/server_runtime.h"
 #include "services/sim/sim_service.h"
@@ -158,6 +159,70 @@ TEST(RemoteEnvFactory, RefusesAnEmptyAddressList) {
                     &message),
             ErrorCode::kInvalidArgument);
   EXPECT_NE(message.find("sim_address"), std::string::npos) << message;
+}
+
+TEST(SimTarget, NamesOneServerAPoolOrAResolvedName) {
+  using V = std::vector<SimServerAddress>;
+  EXPECT_EQ(resolve_sim_target("sim:50051"), (V{{"sim:50051", ""}}));
+  EXPECT_EQ(resolve_sim_target("ipv4:127.0.0.1:7,127.0.0.1:5,127.0.0.1:7"),
+            (V{{"ipv4:127.0.0.1:5", ""}, {"ipv4:127.0.0.1:7", ""}}));
+  EXPECT_EQ(resolve_sim_target("ipv6:[::1]:9"), (V{{"ipv6:[::1]:9", ""}}));
+  // A name stands for every address it resolves to, each verified against the name.
+  const V localhost = resolve_sim_target("dns:///localhost:50051");
+  ASSERT_FALSE(localhost.empty());
+  for (const SimServerAddress& server : localhost) {
+    EXPECT_TRUE(server.address == "ipv4:127.0.0.1:50051" || server.address == "ipv6:[::1]:50051")
+        << server.address;
+    EXPECT_EQ(server.server_name, "localhost");
+  }
+}
+
+TEST(SimTarget, RefusesMalformedTargetsNamingTheField) {
+  for (const std::string target :
+       {"", "sim", "sim:port", "dns://8.8.8.8/sim:1", "dns:///", "dns:sim:1",
+        "ipv4:", "ipv4:127.0.0.1", "ipv4:127.0.0.1:1,", "ipv6:[::1]"}) {
+    std::string message;
+    EXPECT_EQ(code_of([&] { resolve_sim_target(target); }, &message), ErrorCode::kInvalidArgument)
+        << target;
+    EXPECT_NE(message.find("sim_address"), std::string::npos) << message;
+  }
+  EXPECT_EQ(code_of([&] {
+              RemoteEnvFactory({"ipv4:127.0.0.1"}, sim::Robot::kFetch, sim::ObjectShape::kBlock);
+            }),
+            ErrorCode::kInvalidArgument);
+}
+
+// One target for a pool: environments alternate over its servers, and a server that is
+// gone passes its turn instead of failing the run.
+TEST(RemoteEnvFactory, APoolTargetSpreadsEnvironmentsAndSkipsAServerThatIsGone) {
+  SimServer a, b;
+  int gone_port = 0;
+  {
+    SimServer gone;
+    gone_port = std::stoi(gone.address().substr(gone.address().rfind(':') + 1));
+  }
+  auto port_of = [](const std::string& address) { return address.substr(address.rfind(':') + 1); };
+  const std::string pool = "ipv4:127.0.0.1:" + port_of(a.address()) +
+                           ",127.0.0.1:" + port_of(b.address()) +
+                           ",127.0.0.1:" + std::to_string(gone_port);
+  const RemoteEnvFactory factory({pool}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
+                                 sim::WorldProfile::kPaper, {}, milliseconds(300));
+  std::vector<std::unique_ptr<sim::Environment>> envs;
+  for (int i = 0; i < 6; ++i) {
+    envs.push_back(factory.make());
+    envs.back()->reset(static_cast<std::uint64_t>(i));
+    envs.back()->step(sim::Action::Zero(), sim::Goal::Zero(), sim::Objective::kTask);
+  }
+  // Two turns of three: the gone server's turns went to the next live one.
+  EXPECT_GT(a.env_steps(), 0);
+  EXPECT_GT(b.env_steps(), 0);
+  EXPECT_EQ(a.env_steps() + b.env_steps(), 6);
+  // With every server gone, the error is the first one's, naming its address.
+  a.stop();
+  b.stop();
+  std::string message;
+  EXPECT_EQ(code_of([&] { factory.make(); }, &message), ErrorCode::kUnavailable);
+  EXPECT_NE(message.find("127.0.0.1:"), std::string::npos) << message;
 }
 
 // The acceptance test of scale-out: the same run on two remote services and in process
