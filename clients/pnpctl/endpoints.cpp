@@ -20,12 +20,13 @@ const std::string& Endpoints::address_of(const std::string& service) const {
   if (service == "sim") return sim;
   if (service == "inference") return inference;
   if (service == "robot") return robot_controller;
+  if (service == "store") return store;
   if (service == "approach" || service == "manipulate" || service == "retract" ||
       service == "hlc" || service == "e2e")
     return training(service);
   throw_invalid_argument("--only",
                          "services among sim, approach, manipulate, retract, hlc, e2e, inference, "
-                         "robot",
+                         "store, robot",
                          "\"" + service + "\"");
 }
 
@@ -52,6 +53,7 @@ void add_endpoint_options(CLI::App& app, Endpoints& e) {
   add("--inference", e.inference, "PNP_INFERENCE_ADDRESS", "inference service address");
   add("--robot-controller", e.robot_controller, "PNP_ROBOT_CONTROLLER_ADDRESS",
       "robot controller address (pnp-robot-sim); health --only robot");
+  add("--store", e.store, "PNP_STORE_ADDRESS", "pnp-store-server address; health --only store");
   services::add_client_security_flags(app, e.tls);
 }
 

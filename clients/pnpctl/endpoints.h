@@ -22,7 +22,8 @@ struct Endpoints {
   std::string e2e = "127.0.0.1:50056";
   std::string inference = "127.0.0.1:50060";
   std::string robot_controller = "127.0.0.1:50070";  // not in kAllServices: not the platform's
-  services::ClientTlsFiles tls;                      // the same for every service
+  std::string store = "127.0.0.1:50050";  // pnp-store-server; not in kAllServices: optional
+  services::ClientTlsFiles tls;           // the same for every service
 
   // A channel to `address` with the credentials above (INVALID_ARGUMENT naming the flag
   // for a bad address or file).
@@ -30,7 +31,7 @@ struct Endpoints {
 
   // The training service of a role; INVALID_ARGUMENT for an unknown role.
   const std::string& training(const std::string& role) const;
-  // Any service by name: sim, inference, robot (the arm's controller), or a role.
+  // Any service by name: sim, inference, store, robot (the arm's controller), or a role.
   // INVALID_ARGUMENT naming --only otherwise.
   const std::string& address_of(const std::string& service) const;
 };

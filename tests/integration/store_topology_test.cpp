@@ -280,6 +280,13 @@ TEST(StoreTopology, PnpctlPipelineRunsThroughAPlatformWithNoSharedFileAndRidesOu
   auto b = topology.inference("inference-b");
   ASSERT_GT(a->port(), 0) << a->diagnostics();
   ASSERT_GT(b->port(), 0) << b->diagnostics();
+  // The store server answers the probe the deployments use.
+  ChildProcess probe("pnpctl-health-store",
+                     {PNP_BIN_DIR "/pnpctl", "--store", store, "health", "--only", "store"},
+                     topology.dir().path(), {}, own_dir("pnpctl"));
+  const auto probed = probe.wait(kGuard);
+  ASSERT_TRUE(probed && probed->ok()) << probe.stdout_text() << probe.stderr_text();
+  EXPECT_NE(probe.stdout_text().find("SERVING"), std::string::npos) << probe.stdout_text();
   std::vector<std::string> args{PNP_BIN_DIR "/pnpctl",
                                 "--sim",
                                 targets(sim_ports),

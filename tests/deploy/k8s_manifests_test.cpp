@@ -1,0 +1,268 @@
+// deploy/k8s, checked offline: every overlay renders with `kubectl kustomize`, and the
+// rendered objects (plus the pipeline Job, applied on its own) keep the topology's
+// invariants: one writer of the one volume, probes and limits on every server, Services
+// that select Pods listening on their ports, flags and ports that agree, autoscaling and
+// disruption budgets on real workloads, network policies that allow exactly the edges the
+// servers' flags need, and a single-node overlay whose requests fit its node.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "tests/deploy/manifest_objects.h"
+
+namespace pnp::deploy_test {
+namespace {
+
+const std::filesystem::path kK8s = std::filesystem::path(PNP_SOURCE_DIR) / "deploy" / "k8s";
+
+// What a Pod with this command line is a client of: the flags naming another tier.
+const std::vector<std::string> kClientFlags = {"--store",    "--sim-address", "--sim",
+                                               "--approach", "--manipulate",  "--retract",
+                                               "--hlc",      "--e2e",         "--inference"};
+
+class Overlay : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    const Rendered rendered = kustomize(kK8s / "overlays" / GetParam());
+    ASSERT_EQ(rendered.exit_code, 0)
+        << PNP_KUBECTL << " kustomize overlays/" << GetParam() << ": " << rendered.errors;
+    objects_ = rendered.objects;
+    for (const YAML::Node& job : load_all(kK8s / "job-pipeline.yaml")) objects_.push_back(job);
+    workloads_ = workloads(objects_);
+    services_ = of_kind(objects_, "Service");
+  }
+
+  // Each container of each workload with its workload.
+  template <typename F>
+  void for_each_container(F&& f) const {
+    for (const Workload& w : workloads_)
+      for (const auto& c : w.pod_spec["containers"]) f(w, c);
+  }
+  const Workload* workload(const std::string& name) const {
+    for (const Workload& w : workloads_)
+      if (w.name == name) return &w;
+    return nullptr;
+  }
+  std::vector<const Workload*> selected_by(const Labels& selector) const {
+    std::vector<const Workload*> out;
+    for (const Workload& w : workloads_)
+      if (selects(selector, w.pod_labels)) out.push_back(&w);
+    return out;
+  }
+  const YAML::Node* service(const std::string& name) const {
+    for (const YAML::Node& s : services_)
+      if (s["metadata"]["name"].as<std::string>() == name) return &s;
+    return nullptr;
+  }
+
+  std::vector<YAML::Node> objects_;
+  std::vector<Workload> workloads_;
+  std::vector<YAML::Node> services_;
+};
+
+TEST_P(Overlay, OnlyTheStoreHasTheVolumeAndTheDatabase) {
+  EXPECT_TRUE(of_kind(objects_, "PersistentVolumeClaim").empty())
+      << "a free-standing claim: any Pod could mount it";
+  std::vector<std::string> with_claims, with_db;
+  for (const Workload& w : workloads_) {
+    if (w.object["spec"]["volumeClaimTemplates"]) with_claims.push_back(w.name);
+    if (w.pod_spec["volumes"]) {
+      for (const auto& v : w.pod_spec["volumes"]) {
+        EXPECT_FALSE(v["persistentVolumeClaim"] || v["hostPath"] || v["nfs"])
+            << w.name << " mounts shared storage " << v["name"].as<std::string>();
+      }
+    }
+  }
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const auto line = command_line(c);
+    if (flag(line, "--db")) with_db.push_back(w.name);
+  });
+  ASSERT_EQ(with_claims, std::vector<std::string>{"pnp-store"});
+  EXPECT_EQ(with_db, std::vector<std::string>{"pnp-store"});
+  const Workload& store = *workload("pnp-store");
+  EXPECT_EQ(store.kind, "StatefulSet");
+  EXPECT_EQ(store.replicas, 1) << "two store Pods would be two SQLite writers";
+  // The database is on the claim.
+  const YAML::Node container = store.pod_spec["containers"][0];
+  const std::string db = *flag(command_line(container), "--db");
+  bool on_claim = false;
+  for (const auto& mount : container["volumeMounts"]) {
+    if (mount["name"].as<std::string>() == "data")
+      on_claim = db.starts_with(mount["mountPath"].as<std::string>() + "/");
+  }
+  EXPECT_TRUE(on_claim) << db;
+}
+
+TEST_P(Overlay, EveryServerHasProbesRequestsAndLimits) {
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const std::string where = w.name + "/" + c["name"].as<std::string>();
+    if (w.kind != "Job") {
+      EXPECT_TRUE(c["readinessProbe"]) << where;
+      EXPECT_TRUE(c["livenessProbe"]) << where;
+    }
+    for (const char* resource : {"cpu", "memory"}) {
+      const YAML::Node request = c["resources"]["requests"][resource];
+      const YAML::Node limit = c["resources"]["limits"][resource];
+      ASSERT_TRUE(request && limit) << where << " has no " << resource << " request or limit";
+      const bool cpu = std::string(resource) == "cpu";
+      const auto amount = [&](const YAML::Node& q) {
+        return cpu ? millicores(q.as<std::string>()) : mebibytes(q.as<std::string>());
+      };
+      EXPECT_LE(amount(request), amount(limit)) << where << " " << resource;
+    }
+    EXPECT_EQ(c["securityContext"]["readOnlyRootFilesystem"].as<bool>(false), true) << where;
+    EXPECT_EQ(w.pod_spec["securityContext"]["runAsNonRoot"].as<bool>(false), true) << where;
+  });
+}
+
+TEST_P(Overlay, EveryServiceSelectsPodsListeningOnItsPorts) {
+  for (const YAML::Node& s : of_kind(objects_, "Service")) {
+    const std::string name = s["metadata"]["name"].as<std::string>();
+    const auto pods = selected_by(labels_of(s["spec"]["selector"]));
+    ASSERT_FALSE(pods.empty()) << "Service " << name << " selects no Pod";
+    for (const auto& port : s["spec"]["ports"]) {
+      const int target = port["targetPort"].as<int>();
+      for (const Workload* w : pods) {
+        std::set<int> listening;
+        for (const auto& c : w->pod_spec["containers"])
+          for (const int p : container_ports(c)) listening.insert(p);
+        EXPECT_TRUE(listening.contains(target))
+            << "Service " << name << " sends port " << target << " to " << w->name;
+      }
+    }
+  }
+}
+
+TEST_P(Overlay, PortsAgreeWithTheServersFlags) {
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const auto line = command_line(c);
+    const std::string where = w.name + "/" + c["name"].as<std::string>();
+    const auto ports = container_ports(c);
+    const auto listens_on = [&](const std::string& f) {
+      const auto address = flag(line, f);
+      if (!address) return;
+      EXPECT_TRUE(address->starts_with("0.0.0.0:")) << where << " " << f << " " << *address;
+      EXPECT_NE(std::find(ports.begin(), ports.end(), port_of(*address)), ports.end())
+          << where << " " << f << "=" << *address << " is not a containerPort";
+    };
+    listens_on("--address");
+    listens_on("--metrics-address");
+    // The probes check this container's own server.
+    if (const auto address = flag(line, "--address")) {
+      for (const char* probe : {"readinessProbe", "livenessProbe"}) {
+        if (!c[probe]) continue;  // EveryServerHasProbesRequestsAndLimits says so
+        std::string command;
+        for (const auto& word : c[probe]["exec"]["command"])
+          command += word.as<std::string>() + " ";
+        EXPECT_NE(command.find("127.0.0.1:" + std::to_string(port_of(*address))), std::string::npos)
+            << where << " " << probe << ": " << command;
+      }
+    }
+    // A client flag names a Service with that port; dns:/// (the client balances over
+    // every Pod) needs a headless one.
+    for (const std::string& f : kClientFlags) {
+      const auto target = flag(line, f);
+      if (!target) continue;
+      const YAML::Node* s = service(host_of(*target));
+      ASSERT_NE(s, nullptr) << where << " " << f << "=" << *target << ": no such Service";
+      bool has_port = false;
+      for (const auto& p : (*s)["spec"]["ports"])
+        has_port |= p["port"].as<int>() == port_of(*target);
+      EXPECT_TRUE(has_port) << where << " " << f << "=" << *target;
+      if (target->starts_with("dns:///")) {
+        EXPECT_EQ((*s)["spec"]["clusterIP"].as<std::string>(""), "None") << where << " " << f;
+      }
+    }
+  });
+}
+
+TEST_P(Overlay, AutoscalersAndDisruptionBudgetsTargetRealWorkloads) {
+  const auto autoscalers = of_kind(objects_, "HorizontalPodAutoscaler");
+  ASSERT_FALSE(autoscalers.empty());
+  for (const YAML::Node& hpa : autoscalers) {
+    const Workload* target = workload(hpa["spec"]["scaleTargetRef"]["name"].as<std::string>());
+    ASSERT_NE(target, nullptr);
+    EXPECT_EQ(target->kind, hpa["spec"]["scaleTargetRef"]["kind"].as<std::string>());
+    EXPECT_FALSE(target->has_replicas) << target->name << ": replicas would fight the autoscaler";
+    EXPECT_LE(hpa["spec"]["minReplicas"].as<int>(), hpa["spec"]["maxReplicas"].as<int>());
+    for (const auto& c : target->pod_spec["containers"])
+      EXPECT_TRUE(c["resources"]["requests"]["cpu"]) << "CPU utilisation needs a CPU request";
+  }
+  for (const YAML::Node& pdb : of_kind(objects_, "PodDisruptionBudget")) {
+    const auto pods = selected_by(labels_of(pdb["spec"]["selector"]["matchLabels"]));
+    EXPECT_EQ(pods.size(), 1u) << pdb["metadata"]["name"].as<std::string>();
+    EXPECT_TRUE(pdb["spec"]["maxUnavailable"]) << "minAvailable could block every drain";
+    for (const Workload* w : pods) EXPECT_NE(w->name, "pnp-store");
+  }
+}
+
+// Every edge a flag implies is open; the store, simulation and training ports are closed
+// to every Pod without the flag that needs them.
+TEST_P(Overlay, NetworkPoliciesAllowExactlyTheEdgesTheFlagsNeed) {
+  const auto policies = of_kind(objects_, "NetworkPolicy");
+  ASSERT_FALSE(policies.empty());
+  std::map<std::string, std::set<std::string>> clients_of;  // server workload -> clients
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const auto line = command_line(c);
+    for (const std::string& f : kClientFlags) {
+      const auto target = flag(line, f);
+      if (!target) continue;
+      const YAML::Node* s = service(host_of(*target));
+      ASSERT_NE(s, nullptr) << *target;
+      for (const Workload* server : selected_by(labels_of((*s)["spec"]["selector"]))) {
+        EXPECT_TRUE(may_connect(policies, w.pod_labels, server->pod_labels, port_of(*target)))
+            << w.name << " cannot reach " << server->name << " for " << f << "=" << *target;
+        clients_of[server->name].insert(w.name);
+      }
+    }
+  });
+  for (const std::string server : {"pnp-store", "pnp-sim", "pnp-approach", "pnp-hlc"}) {
+    const Workload& s = *workload(server);
+    const int port = container_ports(s.pod_spec["containers"][0]).front();
+    for (const Workload& w : workloads_) {
+      if (w.name == server || clients_of[server].contains(w.name)) continue;
+      EXPECT_FALSE(may_connect(policies, w.pod_labels, s.pod_labels, port))
+          << w.name << " can reach " << server << ":" << port << " without needing it";
+    }
+    // Nor can a stranger's Pod.
+    EXPECT_FALSE(may_connect(policies, {{"app", "stranger"}}, s.pod_labels, port)) << server;
+  }
+  EXPECT_TRUE(
+      may_connect(policies, {{"app", "stranger"}}, workload("pnp-inference")->pod_labels, 50060))
+      << "robots' gateways reach inference from anywhere";
+}
+
+INSTANTIATE_TEST_SUITE_P(K8s, Overlay, ::testing::Values("single-node", "cluster"),
+                         [](const auto& overlay) {
+                           std::string name = overlay.param;
+                           std::erase(name, '-');
+                           return name;
+                         });
+
+// One node of 2 cores and 4 GiB (overlays/single-node/kustomization.yaml): the requests,
+// with every autoscaled tier at its maximum, leave a quarter for the node's own daemons,
+// and no limit asks for more than the node has.
+TEST(SingleNodeOverlay, RequestsFitItsNode) {
+  const Rendered rendered = kustomize(kK8s / "overlays" / "single-node");
+  ASSERT_EQ(rendered.exit_code, 0) << rendered.errors;
+  std::map<std::string, int> autoscaled;
+  for (const YAML::Node& hpa : of_kind(rendered.objects, "HorizontalPodAutoscaler"))
+    autoscaled[hpa["spec"]["scaleTargetRef"]["name"].as<std::string>()] =
+        hpa["spec"]["maxReplicas"].as<int>();
+  long long cpu = 0, memory = 0;
+  for (const Workload& w : workloads(rendered.objects)) {
+    const int replicas = autoscaled.contains(w.name) ? autoscaled[w.name] : w.replicas;
+    for (const auto& c : w.pod_spec["containers"]) {
+      cpu += replicas * millicores(c["resources"]["requests"]["cpu"].as<std::string>());
+      memory += replicas * mebibytes(c["resources"]["requests"]["memory"].as<std::string>());
+      EXPECT_LE(millicores(c["resources"]["limits"]["cpu"].as<std::string>()), 2000) << w.name;
+      EXPECT_LE(mebibytes(c["resources"]["limits"]["memory"].as<std::string>()), 4096) << w.name;
+    }
+  }
+  std::printf("[ measured ] single-node requests: %lld mCPU, %lld MiB\n", cpu, memory);
+  EXPECT_LE(cpu, 1500);
+  EXPECT_LE(memory, 3072);
+}
+
+}  // namespace
+}  // namespace pnp::deploy_test

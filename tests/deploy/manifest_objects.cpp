@@ -1,0 +1,194 @@
+#include "tests/deploy/manifest_objects.h"
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace pnp::deploy_test {
+namespace {
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<YAML::Node> documents(const std::string& text) {
+  std::vector<YAML::Node> out;
+  for (const YAML::Node& doc : YAML::LoadAll(text))
+    if (doc.IsMap()) out.push_back(doc);
+  return out;
+}
+
+bool peer_matches(const YAML::Node& peer, const Labels& client) {
+  if (peer["ipBlock"]) return true;  // any address: a Pod's too
+  const YAML::Node namespaces = peer["namespaceSelector"];
+  const YAML::Node pods = peer["podSelector"];
+  // Every namespace's Pods ({}), or Pods of this namespace matching the pod selector.
+  if (namespaces && labels_of(namespaces["matchLabels"]).empty() && !pods) return true;
+  if (!pods) return false;
+  const Labels wanted = labels_of(pods["matchLabels"]);
+  return wanted.empty() || selects(wanted, client);
+}
+
+bool port_matches(const YAML::Node& rule_port, int port) {
+  if (!rule_port["port"]) return true;
+  const int first = rule_port["port"].as<int>();
+  const int last = rule_port["endPort"] ? rule_port["endPort"].as<int>() : first;
+  return port >= first && port <= last;
+}
+
+}  // namespace
+
+Rendered kustomize(const std::filesystem::path& dir) {
+  const auto errors = std::filesystem::temp_directory_path() /
+                      ("kustomize-" + std::to_string(::getpid()) + ".stderr");
+  const std::string command = std::string("'") + PNP_KUBECTL + "' kustomize '" + dir.string() +
+                              "' 2>'" + errors.string() + "'";
+  Rendered out;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen(command.c_str(), "r"), ::pclose);
+  if (!pipe) throw std::runtime_error("cannot run " + command);
+  std::string text;
+  std::array<char, 4096> buffer{};
+  for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), pipe.get())) > 0;)
+    text.append(buffer.data(), n);
+  const int status = ::pclose(pipe.release());
+  out.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  out.errors = read_file(errors);
+  std::filesystem::remove(errors);
+  if (out.exit_code == 0) out.objects = documents(text);
+  return out;
+}
+
+std::vector<YAML::Node> load_all(const std::filesystem::path& file) {
+  return documents(read_file(file));
+}
+
+std::vector<Workload> workloads(const std::vector<YAML::Node>& objects) {
+  std::vector<Workload> out;
+  for (const YAML::Node& object : objects) {
+    const auto kind = object["kind"].as<std::string>();
+    if (kind != "Deployment" && kind != "StatefulSet" && kind != "Job") continue;
+    Workload w;
+    w.kind = kind;
+    w.name = object["metadata"]["name"].as<std::string>();
+    if (object["spec"]["replicas"]) {
+      w.replicas = object["spec"]["replicas"].as<int>();
+      w.has_replicas = true;
+    }
+    w.pod_labels = labels_of(object["spec"]["template"]["metadata"]["labels"]);
+    w.pod_spec = object["spec"]["template"]["spec"];
+    w.object = object;
+    out.push_back(std::move(w));
+  }
+  return out;
+}
+
+std::vector<YAML::Node> of_kind(const std::vector<YAML::Node>& objects, const std::string& kind) {
+  std::vector<YAML::Node> out;
+  for (const YAML::Node& object : objects)
+    if (object["kind"].as<std::string>() == kind) out.push_back(object);
+  return out;
+}
+
+Labels labels_of(const YAML::Node& map) {
+  Labels out;
+  if (!map || !map.IsMap()) return out;
+  for (const auto& entry : map) out[entry.first.as<std::string>()] = entry.second.as<std::string>();
+  return out;
+}
+
+bool selects(const Labels& selector, const Labels& labels) {
+  if (selector.empty()) return false;
+  for (const auto& [key, value] : selector) {
+    const auto found = labels.find(key);
+    if (found == labels.end() || found->second != value) return false;
+  }
+  return true;
+}
+
+std::vector<std::string> command_line(const YAML::Node& container) {
+  std::vector<std::string> out;
+  for (const char* part : {"command", "args"})
+    if (container[part])
+      for (const auto& word : container[part]) out.push_back(word.as<std::string>());
+  return out;
+}
+
+std::optional<std::string> flag(const std::vector<std::string>& line, const std::string& name) {
+  const std::string prefix = name + "=";
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    if (line[k].starts_with(prefix)) return line[k].substr(prefix.size());
+    if (line[k] == name && k + 1 < line.size()) return line[k + 1];
+  }
+  return std::nullopt;
+}
+
+YAML::Node with_merge_keys(const YAML::Node& map) {
+  YAML::Node out(YAML::NodeType::Map);
+  if (map["<<"])
+    for (const auto& entry : map["<<"]) out[entry.first.as<std::string>()] = entry.second;
+  for (const auto& entry : map)
+    if (entry.first.as<std::string>() != "<<") out[entry.first.as<std::string>()] = entry.second;
+  return out;
+}
+
+std::vector<int> container_ports(const YAML::Node& container) {
+  std::vector<int> out;
+  if (container["ports"])
+    for (const auto& port : container["ports"]) out.push_back(port["containerPort"].as<int>());
+  return out;
+}
+
+int port_of(const std::string& address) {
+  const auto colon = address.rfind(':');
+  if (colon == std::string::npos) return -1;
+  try {
+    return std::stoi(address.substr(colon + 1));
+  } catch (const std::exception&) {
+    return -1;
+  }
+}
+
+std::string host_of(const std::string& target) {
+  std::string name = target.starts_with("dns:///") ? target.substr(7) : target;
+  return name.substr(0, name.rfind(':'));
+}
+
+long long millicores(const std::string& cpu) {
+  if (cpu.ends_with("m")) return std::stoll(cpu.substr(0, cpu.size() - 1));
+  return static_cast<long long>(std::stod(cpu) * 1000);
+}
+
+long long mebibytes(const std::string& memory) {
+  if (memory.ends_with("Gi")) return std::stoll(memory.substr(0, memory.size() - 2)) * 1024;
+  if (memory.ends_with("Mi")) return std::stoll(memory.substr(0, memory.size() - 2));
+  throw std::invalid_argument("memory quantity in Mi or Gi expected, got " + memory);
+}
+
+bool may_connect(const std::vector<YAML::Node>& policies, const Labels& client,
+                 const Labels& server, int port) {
+  bool isolated = false;
+  for (const YAML::Node& policy : policies) {
+    const Labels picks = labels_of(policy["spec"]["podSelector"]["matchLabels"]);
+    if (!picks.empty() && !selects(picks, server)) continue;  // {} picks every Pod
+    isolated = true;
+    if (!policy["spec"]["ingress"]) continue;
+    for (const auto& rule : policy["spec"]["ingress"]) {
+      bool from = !rule["from"];
+      if (rule["from"])
+        for (const auto& peer : rule["from"]) from = from || peer_matches(peer, client);
+      bool ports = !rule["ports"];
+      if (rule["ports"])
+        for (const auto& p : rule["ports"]) ports = ports || port_matches(p, port);
+      if (from && ports) return true;
+    }
+  }
+  return !isolated;
+}
+
+}  // namespace pnp::deploy_test

@@ -1,0 +1,65 @@
+#pragma once
+// The deployment files as objects for the tests to check: Kubernetes overlays rendered by
+// `kubectl kustomize` (the same renderer users apply with), plain YAML files parsed as
+// they are, and the small queries the invariants need (which Pods a selector picks, what
+// a container's flags say, whether a NetworkPolicy lets one Pod reach another's port).
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pnp::deploy_test {
+
+using Labels = std::map<std::string, std::string>;
+
+struct Rendered {
+  int exit_code = -1;
+  std::string errors;  // kubectl's stderr
+  std::vector<YAML::Node> objects;
+};
+
+// `kubectl kustomize DIR` (PNP_KUBECTL).
+Rendered kustomize(const std::filesystem::path& dir);
+// Every document of a YAML file.
+std::vector<YAML::Node> load_all(const std::filesystem::path& file);
+
+// A Deployment, StatefulSet or Job: what its Pods look like.
+struct Workload {
+  std::string kind, name;
+  int replicas = 1;  // spec.replicas, 1 when absent
+  bool has_replicas = false;
+  Labels pod_labels;
+  YAML::Node pod_spec;
+  YAML::Node object;
+};
+std::vector<Workload> workloads(const std::vector<YAML::Node>& objects);
+std::vector<YAML::Node> of_kind(const std::vector<YAML::Node>& objects, const std::string& kind);
+
+Labels labels_of(const YAML::Node& map);
+bool selects(const Labels& selector, const Labels& labels);  // an empty selector picks nothing
+
+// A container's command and args as one list, and the value of `--flag=value` (or
+// `--flag value`) in it.
+std::vector<std::string> command_line(const YAML::Node& container);
+std::optional<std::string> flag(const std::vector<std::string>& line, const std::string& name);
+std::vector<int> container_ports(const YAML::Node& container);
+// A map with its YAML merge key (`<<: *anchor`) applied: yaml-cpp leaves it as a key.
+YAML::Node with_merge_keys(const YAML::Node& map);
+int port_of(const std::string& address);  // the number after the last ':'; -1 if none
+// "dns:///name:port" or "name:port" -> name (the Service a client flag points at).
+std::string host_of(const std::string& target);
+
+// Kubernetes quantities: "500m" / "2" CPU in millicores, "256Mi" / "1Gi" memory in MiB.
+long long millicores(const std::string& cpu);
+long long mebibytes(const std::string& memory);
+
+// Whether the NetworkPolicies let a Pod labelled `client` (in the namespace) open a TCP
+// connection to `port` of a Pod labelled `server`.
+bool may_connect(const std::vector<YAML::Node>& policies, const Labels& client,
+                 const Labels& server, int port);
+
+}  // namespace pnp::deploy_test
