@@ -2,27 +2,12 @@
 
 #include <string>
 
+#include "replica_service_config.h"
+
 namespace pnp::services {
 
 std::string_view replica_service_config() {
-  return R"({
-  "loadBalancingConfig": [{"round_robin": {}}],
-  "methodConfig": [{
-    "name": [
-      {"service": "pnp.policy.v1.PolicyService", "method": "Predict"},
-      {"service": "pnp.policy.v1.PolicyService", "method": "GetServingStatus"},
-      {"service": "pnp.policy.v1.PolicyService", "method": "Ping"},
-      {"service": "grpc.health.v1.Health", "method": "Check"}
-    ],
-    "retryPolicy": {
-      "maxAttempts": 4,
-      "initialBackoff": "0.01s",
-      "maxBackoff": "0.2s",
-      "backoffMultiplier": 2,
-      "retryableStatusCodes": ["UNAVAILABLE"]
-    }
-  }]
-})";
+  return generated::kReplicaServiceConfig;
 }
 
 void balance_over_replicas(grpc::ChannelArguments& args) {

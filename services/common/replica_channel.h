@@ -12,7 +12,8 @@
 
 namespace pnp::services {
 
-// The service config (gRPC's JSON) that does it.
+// The service config (gRPC's JSON, proto/pnp/policy/v1/replica_service_config.json, shared
+// with the Python client) that does it.
 std::string_view replica_service_config();
 
 // Sets it on `args` (which keep their other settings).

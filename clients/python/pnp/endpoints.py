@@ -15,6 +15,16 @@ import grpc
 SERVICES = ("sim", "approach", "manipulate", "retract", "hlc", "e2e", "inference")
 TRAINING_ROLES = ("approach", "manipulate", "retract", "hlc", "e2e")
 _MAX_MESSAGE_BYTES = 64 << 20  # as pnpctl: a run's metrics or a checkpoint list can be large
+# How inference replicas are reached (round_robin over every address the target resolves
+# to, idempotent calls retried on UNAVAILABLE): the JSON the C++ clients embed, from
+# proto/pnp/policy/v1/, shipped beside this module.
+_REPLICA_SERVICE_CONFIG = "replica_service_config.json"
+
+
+def replica_service_config() -> str:
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), _REPLICA_SERVICE_CONFIG)
+    with open(path, encoding="utf-8") as f:
+        return f.read()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,8 +95,14 @@ class Endpoints:
         return getattr(self, role)
 
     def channel(self, address: str) -> grpc.Channel:
-        """A channel to `address` with these credentials."""
+        """A channel to `address` with these credentials. Inference replicas are
+        interchangeable: its channel balances over all of them (`dns:///name:port` or
+        `ipv4:a:p,b:p`), retrying the idempotent calls on another one; a session stays on
+        the replica it began on."""
         options = [("grpc.max_receive_message_length", _MAX_MESSAGE_BYTES)]
+        if address == self.inference:
+            options += [("grpc.service_config", replica_service_config()),
+                        ("grpc.enable_retries", 1)]
         if not self.tls_ca:
             if self.tls_cert or self.tls_key or self.token_file:
                 raise ValueError("tls_ca: expected a CA file when tls_cert, tls_key or "

@@ -23,6 +23,9 @@ def test_pip_install_gives_a_working_package(tmp_path, sim_server):
                    env=dict(os.environ, PIP_NO_CACHE_DIR="1"))
     check = ("import pnp, numpy as np\n"
              "assert pnp.__file__.startswith(%r), pnp.__file__\n"
+             "import json, pnp.endpoints\n"
+             "assert 'round_robin' in json.loads(pnp.endpoints.replica_service_config())"
+             "['loadBalancingConfig'][0]\n"
              "env = pnp.PickAndPlaceEnv(%r)\n"
              "obs, _ = env.reset()\n"
              "obs, *_ = env.step(np.zeros(4))\n"

@@ -127,3 +127,24 @@ def test_endpoints_refuse_unknown_names_and_a_token_without_tls(tmp_path):
     found = pnp.Endpoints.discover(str(tmp_path))
     assert (found.sim, found.inference, found.hlc) == ("127.0.0.1:7", "127.0.0.1:8",
                                                       "127.0.0.1:50055")
+
+
+def test_inference_replicas_are_one_target_and_a_killed_one_costs_no_error(
+        workdir, store_with_hierarchy):
+    """Two inference servers named by one target (as dns:///pnp-inference:50060 names a
+    Deployment's Pods): calls are balanced over both and retried on the survivor when one is
+    SIGKILLed; none fails."""
+    from conftest import Server
+    replicas = [Server(f"inference-replica-{k}",
+                       ["pnp-inference-server", "--db", str(store_with_hierarchy)], workdir)
+                for k in (1, 2)]
+    target = "ipv4:" + ",".join(r.address for r in replicas)
+    try:
+        with pnp.Platform({"inference": target}) as p:
+            for k in range(60):
+                if k == 20:
+                    replicas[0].process.kill()
+                assert p.serving_status()["ready"]
+    finally:
+        for r in replicas:
+            r.stop()
