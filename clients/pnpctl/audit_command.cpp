@@ -1,6 +1,7 @@
 // audit: who called which operator or robot RPC, with what, and how it ended, read from a
-// store's audit trail (docs/RELIABILITY.md, "Who may do what"). Like gc it opens the store
-// file directly, read-only: the trail is for whoever holds the store, not for every caller.
+// store's audit trail (docs/RELIABILITY.md, "Who may do what"): the store file itself,
+// read-only (like gc: the trail is for whoever holds the store), or through pnp-store-server
+// as an operator (ReadAudit).
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -10,18 +11,31 @@
 #include "clients/pnpctl/since_arg.h"
 #include "clients/pnpctl/table.h"
 #include "common/error.h"
+#include "services/store/remote_audit.h"
 #include "store/audit_trail.h"
 
 namespace pnp::pnpctl {
 
-int audit_command(const AuditArgs& args) {
+namespace {
+
+std::vector<store::AuditRecord> read_records(const AuditArgs& args, std::int64_t since) {
+  if (args.store.remote())
+    return services::read_remote_audit(args.store.address, args.store.tls, since, args.limit);
+  if (args.db.empty())
+    throw_invalid_argument("--db", "a store file, or --store host:port", "neither");
   if (!std::filesystem::is_regular_file(args.db))
     throw_invalid_argument("--db", "an existing store file", "\"" + args.db + "\" (no such file)");
+  return store::read_audit(args.db, since, args.limit);
+}
+
+}  // namespace
+
+int audit_command(const AuditArgs& args) {
   const std::int64_t now = std::chrono::duration_cast<std::chrono::milliseconds>(
                                std::chrono::system_clock::now().time_since_epoch())
                                .count();
   const std::int64_t since = args.since.empty() ? 0 : parse_since(args.since, now, "--since");
-  const auto records = store::read_audit(args.db, since, args.limit);
+  const auto records = read_records(args, since);
   if (args.json) {
     for (const store::AuditRecord& r : records) {
       std::printf("%s\n", nlohmann::json{{"id", r.id},

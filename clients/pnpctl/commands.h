@@ -68,10 +68,12 @@ struct BackupArgs {
 };
 int backup_command(const BackupArgs& args);
 
-// The audit trail of the store file at `db`: operator and robot calls, allowed or refused,
-// oldest first (the newest `limit` since `since`: parse_since's forms).
+// The audit trail of the store file at `db`, or of the store server at `store` (which
+// wins): operator and robot calls, allowed or refused, oldest first (the newest `limit`
+// since `since`: parse_since's forms).
 struct AuditArgs {
   std::string db;
+  services::RemoteStoreFlags store;
   std::string since;  // empty: from the start
   int limit = 1000;
   bool json = false;  // one JSON object per line

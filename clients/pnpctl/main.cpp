@@ -161,9 +161,9 @@ int main(int argc, char** argv) {
   AuditArgs audit;
   auto* audit_cmd = app.add_subcommand(
       "audit", "who called which operator or robot RPC, and how it ended (a store's audit trail)");
-  audit_cmd->add_option("--db", audit.db, "the SQLite store [$PNP_DB]")
-      ->envname("PNP_DB")
-      ->required();
+  audit_cmd->add_option("--db", audit.db, "the SQLite store [$PNP_DB]")->envname("PNP_DB");
+  // Not exclusive with --db: $PNP_DB may be set where the store server is used (the image).
+  pnp::services::add_remote_store_flags(*audit_cmd, audit.store, nullptr);
   audit_cmd->add_option("--since", audit.since,
                         "from this long ago (90s, 15m, 2h, 7d) or this UTC time (2026-12-04, "
                         "2026-12-04T15:30:00Z)");

@@ -73,6 +73,10 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.store.v1.StoreService/PruneCheckpoints", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/CollectGarbage", kOperator, true},
     RpcAccess{"/pnp.store.v1.StoreService/Backup", kOperator, true},
+    // The audit trail: servers append (a reader could forge records); operators read it
+    // (it names principals and what they sent).
+    RpcAccess{"/pnp.store.v1.StoreService/AppendAudit", kService, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ReadAudit", kOperator, false},
 };
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "store/audit_trail.h"
 
 #include <algorithm>
+#include <memory>
 
 #include "common/error.h"
 #include "store/retry.h"
@@ -33,8 +34,25 @@ void insert(Database& db, const std::vector<AuditRecord>& batch) {
 
 }  // namespace
 
+AuditSinkOpener file_audit_sink(std::string path) {
+  return [path = std::move(path)]() -> AuditSink {
+    auto db = std::make_shared<Database>(path);
+    migrate(*db);
+    return [db, retry = RetryPolicy{}](const std::vector<AuditRecord>& batch) {
+      with_retry(retry, [&] { insert(*db, batch); });
+    };
+  };
+}
+
 AuditTrail::AuditTrail(std::string path, Report report, std::size_t capacity)
-    : path_(std::move(path)), report_(std::move(report)), capacity_(capacity) {
+    : AuditTrail(file_audit_sink(path), path, std::move(report), capacity) {}
+
+AuditTrail::AuditTrail(AuditSinkOpener open, std::string destination, Report report,
+                       std::size_t capacity)
+    : open_(std::move(open)),
+      destination_(std::move(destination)),
+      report_(std::move(report)),
+      capacity_(capacity) {
   if (capacity_ == 0) throw_invalid_argument("capacity", "at least 1 record", "0");
   writer_ = std::jthread([this](std::stop_token stop) { write_loop(stop); });
 }
@@ -69,8 +87,7 @@ std::uint64_t AuditTrail::dropped() const {
 }
 
 void AuditTrail::write_loop(const std::stop_token& stop) {
-  std::optional<Database> db;
-  RetryPolicy retry;
+  AuditSink sink;
   for (;;) {
     std::vector<AuditRecord> batch;
     {
@@ -83,15 +100,13 @@ void AuditTrail::write_loop(const std::stop_token& stop) {
       }
     }
     try {
-      if (!db) {
-        db.emplace(path_);
-        migrate(*db);
-      }
-      with_retry(retry, [&] { insert(*db, batch); });
+      if (!sink) sink = open_();
+      sink(batch);
     } catch (const std::exception& e) {  // the JSON log still has them
+      sink = nullptr;                    // opened afresh for the next batch
       if (report_) {
-        report_(std::to_string(batch.size()) + " audit record(s) not written to " + path_ + ": " +
-                e.what());
+        report_(std::to_string(batch.size()) + " audit record(s) not written to " + destination_ +
+                ": " + e.what());
       }
     }
     {

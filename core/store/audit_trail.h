@@ -1,9 +1,10 @@
 #pragma once
 // The audit trail: who called which operator or robot RPC, with what, and how it ended
 // (table `audit`, schema migration 6). Appending never makes the RPC wait for the disk: a
-// writer thread commits the records in order, in batches, retrying a busy store. At most
-// `capacity` records wait; beyond that new ones are dropped and counted (the services'
-// JSON log has every record regardless).
+// writer thread commits the records in order, in batches, to a sink: the store file
+// (retrying a busy one), or the store server for a server that holds no file
+// (services/store/remote_audit.h). At most `capacity` records wait; beyond that new ones
+// are dropped and counted (the services' JSON log has every record regardless).
 
 #include <condition_variable>
 #include <cstdint>
@@ -18,12 +19,23 @@
 
 namespace pnp::store {
 
+// Commits one batch, in order, all or nothing; throws on failure.
+using AuditSink = std::function<void(const std::vector<AuditRecord>&)>;
+// Makes a sink, on the writer thread (again after a batch failed); throws on failure.
+using AuditSinkOpener = std::function<AuditSink()>;
+
+// The store file at `path`, created and migrated if needed; a busy store is retried.
+AuditSinkOpener file_audit_sink(std::string path);
+
 class AuditTrail {
  public:
   using Report = std::function<void(const std::string&)>;
-  // Opens (creating and migrating if needed) the store at `path` on the writer thread;
-  // `report` hears about records that could not be written.
+  // Writes to the store file at `path` (file_audit_sink); `report` hears about records
+  // that could not be written.
   AuditTrail(std::string path, Report report, std::size_t capacity = 10'000);
+  // Writes to the sinks `open` makes; `destination` names them in reports.
+  AuditTrail(AuditSinkOpener open, std::string destination, Report report,
+             std::size_t capacity = 10'000);
   ~AuditTrail();  // commits what is queued, then stops
   AuditTrail(const AuditTrail&) = delete;
   AuditTrail& operator=(const AuditTrail&) = delete;
@@ -36,7 +48,8 @@ class AuditTrail {
  private:
   void write_loop(const std::stop_token& stop);
 
-  std::string path_;
+  AuditSinkOpener open_;
+  std::string destination_;
   Report report_;
   std::size_t capacity_;
   mutable std::mutex mutex_;

@@ -25,6 +25,7 @@
 #include "services/common/store_path.h"
 #include "services/inference/policy_service.h"
 #include "services/inference/promotion_watcher.h"
+#include "services/store/remote_audit.h"
 #include "services/store/remote_store.h"
 #include "services/store/store_flags.h"
 
@@ -76,9 +77,10 @@ int main(int argc, char** argv) {
                      remote_store_opener(store_flags.address, store_flags.tls), kind, &limits,
                      served_metrics)
                : std::make_unique<PolicyServiceImpl>(store, kind, &limits, served_metrics);
-    // With a remote store the audit goes to the JSON log only (its trail is a table of the
-    // store's file, which this server does not open).
-    const auto audit = remote ? nullptr : open_audit_trail(store, "inference");
+    // The trail is a table of the store: in the file, or through the store server.
+    const auto audit =
+        remote ? open_remote_audit_trail(store_flags.address, store_flags.tls, "inference")
+               : open_audit_trail(store, "inference");
     security.audit = audit.get();
     const auto reload = [&service] {
       try {

@@ -30,7 +30,8 @@ constexpr const char* kServiceConfig = R"({
       {"service": "pnp.store.v1.StoreService", "method": "ListCheckpoints"},
       {"service": "pnp.store.v1.StoreService", "method": "LatestCheckpoint"},
       {"service": "pnp.store.v1.StoreService", "method": "GetPromotion"},
-      {"service": "pnp.store.v1.StoreService", "method": "ListPromotions"}
+      {"service": "pnp.store.v1.StoreService", "method": "ListPromotions"},
+      {"service": "pnp.store.v1.StoreService", "method": "ReadAudit"}
     ],
     "retryPolicy": {
       "maxAttempts": 4,

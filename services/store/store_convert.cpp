@@ -188,4 +188,20 @@ store::RetentionPolicy retention_from_proto(std::int32_t keep_last, std::string_
   return {.keep_last = keep_last};
 }
 
+void to_proto(const store::AuditRecord& record, store_v1::AuditEntry& out) {
+  out.set_id(record.id);
+  out.set_ts_ms(record.ts_ms);
+  out.set_service(record.service);
+  out.set_principal(record.principal);
+  out.set_peer(record.peer);
+  out.set_rpc(record.rpc);
+  out.set_request(record.request);
+  out.set_code(record.code);
+}
+
+store::AuditRecord from_proto(const store_v1::AuditEntry& entry) {
+  return {entry.id(),   entry.ts_ms(), entry.service(), entry.principal(),
+          entry.peer(), entry.rpc(),   entry.request(), entry.code()};
+}
+
 }  // namespace pnp::services

@@ -28,6 +28,8 @@ void to_proto(const store::Promotion& promotion, store_v1::Promotion& out);
 store::Promotion from_proto(const store_v1::Promotion& promotion);
 void to_proto(const store::GcReport& report, store_v1::GcReport& out);
 store::GcReport from_proto(const store_v1::GcReport& report);
+void to_proto(const store::AuditRecord& record, store_v1::AuditEntry& out);
+store::AuditRecord from_proto(const store_v1::AuditEntry& entry);
 
 store::RunFilter from_proto(const store_v1::ListRunsRequest& request);
 void to_proto(const store::RunFilter& filter, store_v1::ListRunsRequest& out);

@@ -5,9 +5,10 @@
 namespace pnp::services {
 
 void add_remote_store_flags(CLI::App& app, RemoteStoreFlags& flags, CLI::Option* db_option) {
-  app.add_option("--store", flags.address,
-                 "host:port of pnp-store-server, instead of opening a --db file here")
-      ->excludes(db_option);
+  auto* store =
+      app.add_option("--store", flags.address,
+                     "host:port of pnp-store-server, instead of opening a --db file here");
+  if (db_option != nullptr) store->excludes(db_option);
   add_client_security_flags(app, flags.tls, "store-");
 }
 

@@ -10,6 +10,7 @@
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
 #include "services/store/store_convert.h"
+#include "store/audit_trail.h"
 
 namespace pnp::services {
 namespace {
@@ -382,6 +383,73 @@ grpc::Status StoreServiceImpl::Backup(grpc::ServerContext* context, const store_
       return !context->IsCancelled() && writer->Write(message);
     });
     return sent ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
+  });
+}
+
+namespace {
+
+// What one AppendAudit may carry: a client batches at most 256 records of a few KB each.
+constexpr int kMaxAuditRecords = 1000;
+constexpr std::size_t kMaxAuditRequestBytes = 4096;  // the recorded JSON is cut at 2 KB
+constexpr std::size_t kMaxAuditFieldBytes = 512;
+constexpr int kMaxAuditRead = 10'000;
+
+void validate(const store_v1::AuditEntry& entry, int index) {
+  const std::string where = "records[" + std::to_string(index) + "].";
+  if (entry.ts_ms() <= 0)
+    throw_invalid_argument(where + "ts_ms", "a time after the epoch",
+                           std::to_string(entry.ts_ms()));
+  if (entry.rpc().empty() || entry.code().empty())
+    throw_invalid_argument(where + "rpc and code", "both set", "an empty one");
+  if (entry.request().size() > kMaxAuditRequestBytes)
+    throw_invalid_argument(where + "request", "at most 4096 bytes",
+                           std::to_string(entry.request().size()) + " bytes");
+  for (const std::string* field :
+       {&entry.service(), &entry.principal(), &entry.peer(), &entry.rpc(), &entry.code()}) {
+    if (field->size() > kMaxAuditFieldBytes)
+      throw_invalid_argument(where + "service, principal, peer, rpc, code", "at most 512 bytes",
+                             std::to_string(field->size()) + " bytes");
+  }
+}
+
+}  // namespace
+
+grpc::Status StoreServiceImpl::AppendAudit(grpc::ServerContext*,
+                                           const store_v1::AppendAuditRequest* request,
+                                           store_v1::AppendAuditResponse*) {
+  return guarded([&] {
+    if (request->records_size() > kMaxAuditRecords) {
+      throw_invalid_argument("records", "at most 1000 per call",
+                             std::to_string(request->records_size()));
+    }
+    std::vector<store::AuditRecord> batch;
+    for (int k = 0; k < request->records_size(); ++k) {
+      validate(request->records(k), k);
+      batch.push_back(from_proto(request->records(k)));
+    }
+    if (batch.empty()) return grpc::Status::OK;
+    const std::lock_guard lock(audit_mutex_);
+    if (!audit_sink_) audit_sink_ = store::file_audit_sink(connections_.path())();
+    try {
+      audit_sink_(batch);
+    } catch (...) {
+      audit_sink_ = nullptr;  // opened afresh for the next batch
+      throw;
+    }
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::ReadAudit(grpc::ServerContext*,
+                                         const store_v1::ReadAuditRequest* request,
+                                         store_v1::ReadAuditResponse* response) {
+  return guarded([&] {
+    if (request->limit() < 1 || request->limit() > kMaxAuditRead)
+      throw_invalid_argument("limit", "1..10000", std::to_string(request->limit()));
+    for (const auto& record :
+         store::read_audit(connections_.path(), request->since_ms(), request->limit()))
+      to_proto(record, *response->add_records());
+    return grpc::Status::OK;
   });
 }
 

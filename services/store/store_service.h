@@ -9,6 +9,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <atomic>
+#include <mutex>
 #include <string>
 
 #include "pnp/store/v1/store_service.grpc.pb.h"
@@ -16,6 +17,7 @@
 #include "services/store/promotion_feed.h"
 #include "services/store/store_connections.h"
 #include "services/store/store_convert.h"
+#include "store/audit_trail.h"
 
 namespace pnp::services {
 
@@ -75,9 +77,16 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
                               store_v1::GcReport*) override;
   grpc::Status Backup(grpc::ServerContext*, const store_v1::BackupRequest*,
                       grpc::ServerWriter<store_v1::BackupResponse>*) override;
+  grpc::Status AppendAudit(grpc::ServerContext*, const store_v1::AppendAuditRequest*,
+                           store_v1::AppendAuditResponse*) override;
+  grpc::Status ReadAudit(grpc::ServerContext*, const store_v1::ReadAuditRequest*,
+                         store_v1::ReadAuditResponse*) override;
 
  private:
   StoreConnections connections_;
+  // Audit batches are committed before AppendAudit answers, one batch at a time.
+  std::mutex audit_mutex_;
+  store::AuditSink audit_sink_;
   StreamLimits* limits_;
   PromotionFeed promotions_changed_;
   std::atomic<bool> stopping_{false};

@@ -24,6 +24,7 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/common/store_path.h"
+#include "services/store/remote_audit.h"
 #include "services/store/remote_store.h"
 #include "services/store/store_flags.h"
 #include "services/train/training_service.h"
@@ -160,9 +161,10 @@ int main(int argc, char** argv) {
       log_event(name, "store", {{"message", line}});
     };
     options.open_store = open_store;
-    // With a remote store the audit goes to the JSON log only (the trail is a table of the
-    // store's file, which this server does not open).
-    const auto audit = store_flags.address.empty() ? open_audit_trail(db, name) : nullptr;
+    // The trail is a table of the store: in the file, or through the store server.
+    const auto audit = store_flags.address.empty()
+                           ? open_audit_trail(db, name)
+                           : open_remote_audit_trail(store_flags.address, store_flags.tls, name);
     security.audit = audit.get();
     pnp::training::RunManager manager(options);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), name);

@@ -188,6 +188,24 @@ TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutA
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - promoted_at)
           .count());
   EXPECT_EQ(served_hlc(*stub_a), fresh.back());
+  // The promotion is in the store's audit trail, written by replica A through the store
+  // server, and an operator reads it back from there.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return StoreReader(topology.db())
+                   .text(
+                       "SELECT COUNT(*) FROM audit WHERE service = 'inference' AND rpc LIKE "
+                       "'%/PromoteCheckpoint' AND code = 'OK'") == "1";
+      },
+      kGuard, 20ms));
+  ChildProcess audit(
+      "pnpctl-audit",
+      {PNP_BIN_DIR "/pnpctl", "audit", "--store", loopback(topology.store_port()), "--json"},
+      topology.dir().path());
+  const auto audited = audit.wait(kGuard);
+  ASSERT_TRUE(audited && audited->ok()) << audit.stderr_text();
+  EXPECT_NE(audit.stdout_text().find("PromoteCheckpoint"), std::string::npos)
+      << audit.stdout_text();
 
   // A client balanced over both replicas (as pnpctl, the gateway and the dashboard dial
   // inference) predicts while replica A is killed.

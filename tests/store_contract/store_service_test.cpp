@@ -5,6 +5,8 @@
 #include <thread>
 
 #include "common/checksum.h"
+#include "services/store/remote_audit.h"
+#include "store/audit_trail.h"
 #include "tests/store_contract/store_contract.h"
 
 namespace pnp::store {
@@ -135,6 +137,55 @@ TEST_P(StoreService, AStoreServerThatIsGoneIsUnavailable) {
   server_.reset();
   EXPECT_EQ(code_of([&] { store->list_runs(); }), ErrorCode::kUnavailable);
   EXPECT_EQ(code_of([&] { store->create_run(spec()); }), ErrorCode::kUnavailable);
+}
+
+// A server without the file (--store) audits through the store server: its trail's
+// batches land in the store's audit table, in order, and read back through the service.
+TEST_P(StoreService, AuditRecordsOfAServerWithoutTheFileLandInTheStoresTrail) {
+  std::vector<std::string> problems;
+  auto trail = services::open_remote_audit_trail(address_, {}, "inference");
+  for (int k = 1; k <= 3; ++k) {
+    trail->append({0, 1000 + k, "inference", "ops", "ipv4:127.0.0.1:5",
+                   "/pnp.policy.v1.Policy"
+                   "Service/PromoteCheckpoint",
+                   "{\"checkpoint_ids\":[" + std::to_string(k) + "]}", "OK"});
+  }
+  trail->flush();
+  const auto read = services::read_remote_audit(address_, {}, 0, 10);
+  ASSERT_EQ(read.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(read[k].ts_ms, 1001 + static_cast<std::int64_t>(k));
+    EXPECT_EQ(read[k].principal, "ops");
+    EXPECT_EQ(read[k].code, "OK");
+    EXPECT_GT(read[k].id, 0);
+  }
+  EXPECT_EQ(read_audit(path_, 1002, 10).size(), 2u);  // the same table, in the file
+  EXPECT_EQ(services::read_remote_audit(address_, {}, 0, 1).front().ts_ms, 1003);  // newest
+}
+
+TEST_P(StoreService, AuditRefusalsNameTheFieldAndWriteNothing) {
+  try {
+    services::read_remote_audit(address_, {}, 0, 0);
+    ADD_FAILURE() << "a limit of 0 was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("limit"), std::string::npos) << e.what();
+  }
+  grpc::ClientContext context;
+  v1::AppendAuditRequest request;
+  auto* good = request.add_records();
+  good->set_ts_ms(5);
+  good->set_rpc("/x");
+  good->set_code("OK");
+  auto* bad = request.add_records();
+  *bad = *good;
+  bad->set_ts_ms(0);
+  v1::AppendAuditResponse response;
+  const grpc::Status status = stub()->AppendAudit(&context, request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("records[1].ts_ms"), std::string::npos)
+      << status.error_message();
+  EXPECT_TRUE(read_audit(path_, 0, 10).empty()) << "half of a refused batch was written";
 }
 
 INSTANTIATE_TEST_SUITE_P(Remote, StoreService, ::testing::Values(Backend::kRemote), backend_name);
