@@ -22,9 +22,7 @@ RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& targets, sim:
                 "sim_address: expected at least one simulation service address, got none");
   }
   // Malformed targets are refused now; whether a name resolves is asked at each make().
-  for (const std::string& target : targets_) {
-    if (!target.starts_with("dns:")) resolve_sim_target(target);
-  }
+  for (const std::string& target : targets_) validate_sim_target(target);
   services::validate(tls_);
 }
 

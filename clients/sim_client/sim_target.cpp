@@ -16,13 +16,15 @@ namespace {
 
 constexpr std::string_view kField = "sim_address";
 
-[[noreturn]] void refuse(const std::string& target, std::string_view expected) {
-  throw_invalid_argument(kField, expected, "\"" + target + "\"");
+[[noreturn]] void refuse(const std::string& target, std::string_view expected,
+                         std::string_view field = kField) {
+  throw_invalid_argument(field, expected, "\"" + target + "\"");
 }
 
 // "host:port" split at the last colon; host unbracketed.
-std::pair<std::string, std::string> split_host_port(const std::string& address) {
-  services::validate_address(address, kField);
+std::pair<std::string, std::string> split_host_port(const std::string& address,
+                                                    std::string_view field = kField) {
+  services::validate_address(address, field);
   const auto colon = address.rfind(':');
   std::string host = address.substr(0, colon);
   if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
@@ -30,11 +32,18 @@ std::pair<std::string, std::string> split_host_port(const std::string& address) 
   return {host, address.substr(colon + 1)};
 }
 
-std::vector<SimServerAddress> resolve_dns(const std::string& target) {
+// "dns:///host:port" -> "host:port", validated.
+std::string dns_name(const std::string& target, std::string_view field) {
+  if (!target.starts_with("dns:///")) refuse(target, "dns:///host:port", field);
   const std::string name = target.substr(std::string_view("dns:///").size());
   if (name.empty() || name.find('/') != std::string::npos)
-    refuse(target, "dns:///host:port (no authority)");
-  const auto [host, port] = split_host_port(name);
+    refuse(target, "dns:///host:port (no authority)", field);
+  split_host_port(name, field);
+  return name;
+}
+
+std::vector<SimServerAddress> resolve_dns(const std::string& target) {
+  const auto [host, port] = split_host_port(dns_name(target, kField));
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;
@@ -63,33 +72,47 @@ std::vector<SimServerAddress> resolve_dns(const std::string& target) {
   return servers;
 }
 
-std::vector<SimServerAddress> split_list(const std::string& target, std::string_view scheme) {
+std::vector<SimServerAddress> split_list(const std::string& target, std::string_view field) {
+  const std::string scheme = target.substr(0, 5);  // ipv4: or ipv6:
   std::vector<SimServerAddress> servers;
   std::string_view rest = std::string_view(target).substr(scheme.size());
   while (true) {
     const auto comma = rest.find(',');
     const std::string member(rest.substr(0, comma));
-    if (member.empty()) refuse(target, std::string(scheme) + "host:port[,host:port...]");
-    split_host_port(member);  // validates
-    servers.push_back({std::string(scheme) + member, ""});
+    if (member.empty()) refuse(target, scheme + "host:port[,host:port...]", field);
+    split_host_port(member, field);  // validates
+    servers.push_back({scheme + member, ""});
     if (comma == std::string_view::npos) break;
     rest.remove_prefix(comma + 1);
   }
   return servers;
 }
 
+bool is_list(const std::string& target) {
+  return target.starts_with("ipv4:") || target.starts_with("ipv6:");
+}
+
 }  // namespace
 
+void validate_sim_target(const std::string& target, std::string_view field) {
+  if (target.starts_with("dns:")) {
+    dns_name(target, field);
+  } else if (is_list(target)) {
+    split_list(target, field);
+  } else {
+    if (target.empty()) refuse(target, "host:port", field);
+    services::validate_address(target, field);
+  }
+}
+
 std::vector<SimServerAddress> resolve_sim_target(const std::string& target) {
+  validate_sim_target(target);
   std::vector<SimServerAddress> servers;
   if (target.starts_with("dns:")) {
-    if (!target.starts_with("dns:///")) refuse(target, "dns:///host:port");
     servers = resolve_dns(target);
-  } else if (target.starts_with("ipv4:") || target.starts_with("ipv6:")) {
-    servers = split_list(target, target.substr(0, 5));
+  } else if (is_list(target)) {
+    servers = split_list(target, kField);
   } else {
-    if (target.empty()) refuse(target, "host:port");
-    services::validate_address(target, kField);
     servers.push_back({target, ""});
   }
   std::sort(servers.begin(), servers.end());

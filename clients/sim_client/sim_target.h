@@ -13,6 +13,7 @@
 // channel instead, and an environment stays on the member that created it.
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pnp::sim_client {
@@ -22,6 +23,10 @@ struct SimServerAddress {
   std::string server_name;  // the name its certificate must carry; empty: the host dialled
   auto operator<=>(const SimServerAddress&) const = default;
 };
+
+// INVALID_ARGUMENT naming `field` unless `target` has one of the forms above (nothing is
+// resolved).
+void validate_sim_target(const std::string& target, std::string_view field = "sim_address");
 
 // The servers `target` names now, sorted (so turns over them are stable while the set is),
 // without duplicates. INVALID_ARGUMENT naming sim_address for a malformed target;

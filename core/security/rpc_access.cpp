@@ -74,9 +74,9 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.store.v1.StoreService/CollectGarbage", kOperator, true},
     RpcAccess{"/pnp.store.v1.StoreService/Backup", kOperator, true},
     // The audit trail: servers append (a reader could forge records); operators read it
-    // (it names principals and what they sent).
+    // (it names principals and what they sent), and who read it is audited in turn.
     RpcAccess{"/pnp.store.v1.StoreService/AppendAudit", kService, false},
-    RpcAccess{"/pnp.store.v1.StoreService/ReadAudit", kOperator, false},
+    RpcAccess{"/pnp.store.v1.StoreService/ReadAudit", kOperator, true},
 };
 
 }  // namespace

@@ -18,6 +18,7 @@
 
 #include "build_info.h"
 #include "clients/sim_client/remote_env_factory.h"
+#include "clients/sim_client/sim_target.h"
 #include "common/error.h"
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
@@ -136,6 +137,8 @@ int main(int argc, char** argv) {
     // Before anything is created or resumed: a refused flag leaves nothing behind.
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     validate(sim_tls);
+    for (const std::string& target : sim_addresses)
+      pnp::sim_client::validate_sim_target(target, "--sim-address");
     pnp::store::StoreOpener open_store;
     if (store_flags.address.empty())
       db = resolve_store_path(db, false);
