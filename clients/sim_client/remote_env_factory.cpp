@@ -27,14 +27,22 @@ RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& targets, sim:
 }
 
 std::vector<SimServerAddress> RemoteEnvFactory::servers_now() const {
+  // A target that resolves to nothing now (a name with no ready Pod) leaves the others.
   std::vector<SimServerAddress> servers;
+  std::string unresolved;
   for (const std::string& target : targets_) {
-    for (SimServerAddress& server : resolve_sim_target(target)) {
-      if (server.server_name.empty() || !tls_.server_name.empty())
-        server.server_name = tls_.server_name;
-      servers.push_back(std::move(server));
+    try {
+      for (SimServerAddress& server : resolve_sim_target(target)) {
+        if (server.server_name.empty() || !tls_.server_name.empty())
+          server.server_name = tls_.server_name;
+        servers.push_back(std::move(server));
+      }
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kUnavailable) throw;
+      unresolved += (unresolved.empty() ? "" : "; ") + std::string(e.what());
     }
   }
+  if (servers.empty()) throw Error(ErrorCode::kUnavailable, unresolved);
   return servers;
 }
 

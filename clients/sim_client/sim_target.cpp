@@ -47,7 +47,7 @@ std::vector<SimServerAddress> resolve_dns(const std::string& target) {
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;
-  hints.ai_flags = AI_NUMERICSERV;
+  hints.ai_flags = AI_NUMERICSERV | AI_ADDRCONFIG;  // no IPv6 answers on an IPv4-only host
   addrinfo* found = nullptr;
   const int failed = ::getaddrinfo(host.c_str(), port.c_str(), &hints, &found);
   const std::unique_ptr<addrinfo, decltype(&::freeaddrinfo)> owned(found, &::freeaddrinfo);
@@ -79,8 +79,19 @@ std::vector<SimServerAddress> split_list(const std::string& target, std::string_
   while (true) {
     const auto comma = rest.find(',');
     const std::string member(rest.substr(0, comma));
-    if (member.empty()) refuse(target, scheme + "host:port[,host:port...]", field);
-    split_host_port(member, field);  // validates
+    if (member.empty()) refuse(target, scheme + "address:port[,address:port...]", field);
+    const auto [host, port] = split_host_port(member, field);
+    // gRPC takes literal addresses only here (and brackets around IPv6 ones).
+    std::array<unsigned char, sizeof(in6_addr)> parsed{};
+    const bool ipv6 = scheme == "ipv6:";
+    const bool bracketed = member.starts_with('[');
+    if (bracketed != ipv6 ||
+        ::inet_pton(ipv6 ? AF_INET6 : AF_INET, host.c_str(), parsed.data()) != 1) {
+      refuse(target,
+             ipv6 ? "ipv6:[address]:port,... with literal IPv6 addresses"
+                  : "ipv4:address:port,... with literal IPv4 addresses",
+             field);
+    }
     servers.push_back({scheme + member, ""});
     if (comma == std::string_view::npos) break;
     rest.remove_prefix(comma + 1);

@@ -393,6 +393,8 @@ constexpr int kMaxAuditRecords = 1000;
 constexpr std::size_t kMaxAuditRequestBytes = 4096;  // the recorded JSON is cut at 2 KB
 constexpr std::size_t kMaxAuditFieldBytes = 512;
 constexpr int kMaxAuditRead = 10'000;
+// A page of ReadAudit: well under the store service's 512 KiB message cap.
+constexpr std::size_t kAuditPageBytes = 256 << 10;
 
 void validate(const store_v1::AuditEntry& entry, int index) {
   const std::string where = "records[" + std::to_string(index) + "].";
@@ -446,9 +448,22 @@ grpc::Status StoreServiceImpl::ReadAudit(grpc::ServerContext*,
   return guarded([&] {
     if (request->limit() < 1 || request->limit() > kMaxAuditRead)
       throw_invalid_argument("limit", "1..10000", std::to_string(request->limit()));
-    for (const auto& record :
-         store::read_audit(connections_.path(), request->since_ms(), request->limit()))
-      to_proto(record, *response->add_records());
+    if (request->before_id() < 0)
+      throw_invalid_argument("before_id", "0 or a record id", std::to_string(request->before_id()));
+    const auto records = store::read_audit(connections_.path(), request->since_ms(),
+                                           request->limit(), request->before_id());
+    // The newest records that fit one message; the older rest is the next page.
+    std::size_t first = records.size(), bytes = 0;
+    while (first > 0) {
+      store_v1::AuditEntry entry;
+      to_proto(records[first - 1], entry);
+      bytes += entry.ByteSizeLong() + 8;  // with the field's tag and length
+      if (bytes > kAuditPageBytes) break;
+      --first;
+    }
+    for (std::size_t k = first; k < records.size(); ++k)
+      to_proto(records[k], *response->add_records());
+    response->set_more(first > 0);
     return grpc::Status::OK;
   });
 }

@@ -80,10 +80,13 @@ TEST_F(ComposeFile, EveryServerIsHealthCheckedOnItsOwnPortAndPublishedOnLoopback
     const std::vector<std::string>& line = commands_[name];
     const int port = listening_port(name);
     if (port > 0 && line.front() != "pnp-dashboard") {  // the dashboard serves HTTPS
-      std::string test;
-      for (const auto& word : service["healthcheck"]["test"]) test += word.as<std::string>() + " ";
-      EXPECT_NE(test.find("127.0.0.1:" + std::to_string(port)), std::string::npos)
-          << name << ": " << test;
+      std::vector<std::string> test;
+      for (const auto& word : service["healthcheck"]["test"])
+        test.push_back(word.as<std::string>());
+      std::optional<int> checked;
+      for (const std::string& word : test)
+        if (word.starts_with("127.0.0.1:")) checked = port_of(word);
+      EXPECT_EQ(checked, port) << name << "'s healthcheck does not check its own port";
     }
     if (!service["ports"]) continue;
     const auto metrics = flag(line, "--metrics-address");
@@ -93,6 +96,19 @@ TEST_F(ComposeFile, EveryServerIsHealthCheckedOnItsOwnPortAndPublishedOnLoopback
       const int inside = port_of(mapping);
       EXPECT_TRUE(inside == port || (metrics && inside == port_of(*metrics)))
           << name << " publishes " << mapping << ", where nothing listens";
+    }
+  }
+}
+
+TEST_F(ComposeFile, EveryNameAClientDialsIsOnTheDevelopmentCertificate) {
+  const auto names =
+      dev_certificate_names(std::filesystem::path(PNP_SOURCE_DIR) / "scripts" / "make-dev-certs");
+  for (const auto& [name, line] : commands_) {
+    for (const std::string& f : kClientFlags) {
+      const auto target = flag(line, f);
+      if (target) {
+        EXPECT_TRUE(certificate_covers(names, host_of(*target))) << name << " " << f;
+      }
     }
   }
 }

@@ -147,15 +147,15 @@ TEST_P(Overlay, PortsAgreeWithTheServersFlags) {
     };
     listens_on("--address");
     listens_on("--metrics-address");
-    // The probes check this container's own server.
+    // The probes check this container's own server, by its name and port.
     if (const auto address = flag(line, "--address")) {
       for (const char* probe : {"readinessProbe", "livenessProbe"}) {
         if (!c[probe]) continue;  // EveryServerHasProbesRequestsAndLimits says so
-        std::string command;
+        std::vector<std::string> command;
         for (const auto& word : c[probe]["exec"]["command"])
-          command += word.as<std::string>() + " ";
-        EXPECT_NE(command.find("127.0.0.1:" + std::to_string(port_of(*address))), std::string::npos)
-            << where << " " << probe << ": " << command;
+          command.push_back(word.as<std::string>());
+        EXPECT_EQ(probed_port(command, c["name"].as<std::string>()), port_of(*address))
+            << where << " " << probe << " does not check this server";
       }
     }
     // A client flag names a Service with that port; dns:/// (the client balances over
@@ -230,6 +230,59 @@ TEST_P(Overlay, NetworkPoliciesAllowExactlyTheEdgesTheFlagsNeed) {
   EXPECT_TRUE(
       may_connect(policies, {{"app", "stranger"}}, workload("pnp-inference")->pod_labels, 50060))
       << "robots' gateways reach inference from anywhere";
+}
+
+// `$(NAME)` in a command line is expanded by the kubelet from the container's environment:
+// a name it does not have would be passed on literally.
+TEST_P(Overlay, EveryVariableACommandUsesIsInTheContainersEnvironment) {
+  std::map<std::string, std::set<std::string>> config_maps;
+  for (const YAML::Node& map : of_kind(objects_, "ConfigMap"))
+    for (const auto& entry : map["data"])
+      config_maps[map["metadata"]["name"].as<std::string>()].insert(entry.first.as<std::string>());
+  int uses = 0;
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    std::set<std::string> environment;
+    if (c["env"])
+      for (const auto& e : c["env"]) environment.insert(e["name"].as<std::string>());
+    if (c["envFrom"])
+      for (const auto& from : c["envFrom"])
+        for (const auto& key : config_maps[from["configMapRef"]["name"].as<std::string>()])
+          environment.insert(key);
+    for (const std::string& word : command_line(c)) {
+      for (auto at = word.find("$("); at != std::string::npos; at = word.find("$(", at + 2)) {
+        const std::string name = word.substr(at + 2, word.find(')', at) - at - 2);
+        EXPECT_TRUE(environment.contains(name)) << w.name << ": $(" << name << ") is not set";
+        ++uses;
+      }
+    }
+  });
+  EXPECT_GT(uses, 0);  // the trainers' --threads=$(PNP_TRAIN_THREADS)
+}
+
+// Clients verify the server certificate against the name they dial: the development
+// certificates (scripts/make-dev-certs) carry every one, also as dialled from another
+// namespace.
+TEST_P(Overlay, EveryNameAClientDialsIsOnTheDevelopmentCertificate) {
+  const auto names =
+      dev_certificate_names(std::filesystem::path(PNP_SOURCE_DIR) / "scripts" / "make-dev-certs");
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const auto line = command_line(c);
+    for (const std::string& f : kClientFlags) {
+      const auto target = flag(line, f);
+      if (!target) continue;
+      const std::string host = host_of(*target);
+      EXPECT_TRUE(certificate_covers(names, host)) << w.name << " dials " << host;
+      EXPECT_TRUE(certificate_covers(names, host + ".pnp")) << host << ".pnp";
+      EXPECT_TRUE(certificate_covers(names, host + ".pnp.svc.cluster.local")) << host;
+    }
+  });
+}
+
+TEST_P(Overlay, EveryContainerRunsTheOneImage) {
+  std::set<std::string> images;
+  for_each_container(
+      [&](const Workload&, const YAML::Node& c) { images.insert(c["image"].as<std::string>()); });
+  EXPECT_EQ(images.size(), 1u) << "the Job and the servers must run the same build";
 }
 
 INSTANTIATE_TEST_SUITE_P(K8s, Overlay, ::testing::Values("single-node", "cluster"),

@@ -24,14 +24,23 @@ std::vector<YAML::Node> documents(const std::string& text) {
   return out;
 }
 
+// matchLabels only: a selector this evaluator cannot judge fails the test that asked.
+Labels simple_selector(const YAML::Node& selector) {
+  if (selector && selector["matchExpressions"])
+    throw std::invalid_argument("a selector with matchExpressions: not evaluated here");
+  return selector ? labels_of(selector["matchLabels"]) : Labels{};
+}
+
 bool peer_matches(const YAML::Node& peer, const Labels& client) {
   if (peer["ipBlock"]) return true;  // any address: a Pod's too
   const YAML::Node namespaces = peer["namespaceSelector"];
   const YAML::Node pods = peer["podSelector"];
+  if (namespaces && !simple_selector(namespaces).empty())
+    throw std::invalid_argument("a namespaceSelector with labels: not evaluated here");
   // Every namespace's Pods ({}), or Pods of this namespace matching the pod selector.
   if (namespaces && labels_of(namespaces["matchLabels"]).empty() && !pods) return true;
   if (!pods) return false;
-  const Labels wanted = labels_of(pods["matchLabels"]);
+  const Labels wanted = simple_selector(pods);
   return wanted.empty() || selects(wanted, client);
 }
 
@@ -174,21 +183,61 @@ bool may_connect(const std::vector<YAML::Node>& policies, const Labels& client,
                  const Labels& server, int port) {
   bool isolated = false;
   for (const YAML::Node& policy : policies) {
-    const Labels picks = labels_of(policy["spec"]["podSelector"]["matchLabels"]);
+    bool ingress = !policy["spec"]["policyTypes"];  // absent: Ingress (and Egress if rules)
+    for (const auto& type : policy["spec"]["policyTypes"])
+      ingress = ingress || type.as<std::string>() == "Ingress";
+    if (!ingress) continue;
+    const Labels picks = simple_selector(policy["spec"]["podSelector"]);
     if (!picks.empty() && !selects(picks, server)) continue;  // {} picks every Pod
     isolated = true;
     if (!policy["spec"]["ingress"]) continue;
     for (const auto& rule : policy["spec"]["ingress"]) {
-      bool from = !rule["from"];
-      if (rule["from"])
+      bool from = !rule["from"] || rule["from"].size() == 0;  // no peers listed: every source
+      if (!from)
         for (const auto& peer : rule["from"]) from = from || peer_matches(peer, client);
-      bool ports = !rule["ports"];
-      if (rule["ports"])
+      bool ports = !rule["ports"] || rule["ports"].size() == 0;
+      if (!ports)
         for (const auto& p : rule["ports"]) ports = ports || port_matches(p, port);
       if (from && ports) return true;
     }
   }
   return !isolated;
+}
+
+std::optional<int> probed_port(const std::vector<std::string>& command, const std::string& name) {
+  const auto address = flag(command, "--" + name);
+  if (!address || !address->starts_with("127.0.0.1:")) return std::nullopt;
+  if (flag(command, "--only") != name) return std::nullopt;
+  return port_of(*address);
+}
+
+std::vector<std::string> dev_certificate_names(const std::filesystem::path& script) {
+  const std::string text = read_file(script);
+  auto start = text.find("names=(");  // the default list: the first one that is not empty
+  while (start != std::string::npos && text.compare(start + 7, 1, ")") == 0)
+    start = text.find("names=(", start + 1);
+  if (start == std::string::npos) throw std::runtime_error(script.string() + ": no names=(...)");
+  const auto end = text.find(')', start);
+  std::istringstream words(text.substr(start + 7, end - start - 7));
+  std::vector<std::string> names;
+  for (std::string word; words >> word;) {
+    if (word.size() >= 2 && word.front() == '\'' && word.back() == '\'')
+      word = word.substr(1, word.size() - 2);
+    names.push_back(word);
+  }
+  return names;
+}
+
+bool certificate_covers(const std::vector<std::string>& names, const std::string& host) {
+  for (const std::string& name : names) {
+    if (name == host) return true;
+    // "*.pnp" covers "pnp-inference.pnp": exactly one label in place of the star.
+    if (name.starts_with("*.")) {
+      const auto dot = host.find('.');
+      if (dot != std::string::npos && dot > 0 && host.substr(dot) == name.substr(1)) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace pnp::deploy_test

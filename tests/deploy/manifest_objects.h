@@ -57,8 +57,18 @@ std::string host_of(const std::string& target);
 long long millicores(const std::string& cpu);
 long long mebibytes(const std::string& memory);
 
+// The port a probe or healthcheck command checks, when it is pnpctl checking service
+// `name` on loopback (`--NAME=127.0.0.1:PORT ... --only=NAME`); nullopt otherwise.
+std::optional<int> probed_port(const std::vector<std::string>& command, const std::string& name);
+
+// The server names scripts/make-dev-certs puts in the server certificate by default, and
+// whether one of them (exactly, or a one-label wildcard) covers `host`.
+std::vector<std::string> dev_certificate_names(const std::filesystem::path& script);
+bool certificate_covers(const std::vector<std::string>& names, const std::string& host);
+
 // Whether the NetworkPolicies let a Pod labelled `client` (in the namespace) open a TCP
-// connection to `port` of a Pod labelled `server`.
+// connection to `port` of a Pod labelled `server` (ingress rules, matchLabels selectors;
+// anything else throws std::invalid_argument rather than guess).
 bool may_connect(const std::vector<YAML::Node>& policies, const Labels& client,
                  const Labels& server, int port);
 

@@ -180,7 +180,8 @@ TEST(SimTarget, NamesOneServerAPoolOrAResolvedName) {
 TEST(SimTarget, RefusesMalformedTargetsNamingTheField) {
   for (const std::string target :
        {"", "sim", "sim:port", "dns://8.8.8.8/sim:1", "dns:///", "dns:sim:1",
-        "ipv4:", "ipv4:127.0.0.1", "ipv4:127.0.0.1:1,", "ipv6:[::1]"}) {
+        "ipv4:", "ipv4:127.0.0.1", "ipv4:127.0.0.1:1,", "ipv6:[::1]", "ipv4:sim:50051",
+        "ipv6:::1:5", "ipv4:[::1]:5", "ipv6:[127.0.0.1]:5"}) {
     std::string message;
     EXPECT_EQ(code_of([&] { resolve_sim_target(target); }, &message), ErrorCode::kInvalidArgument)
         << target;

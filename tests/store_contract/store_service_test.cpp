@@ -163,6 +163,27 @@ TEST_P(StoreService, AuditRecordsOfAServerWithoutTheFileLandInTheStoresTrail) {
   EXPECT_EQ(services::read_remote_audit(address_, {}, 0, 1).front().ts_ms, 1003);  // newest
 }
 
+// More records than one message holds (the service caps messages at 512 KiB): they travel
+// in several AppendAudit requests and come back in several ReadAudit pages, all in order.
+TEST_P(StoreService, AnAuditTrailLargerThanAMessageGoesAndComesBackWhole) {
+  auto trail = services::open_remote_audit_trail(address_, {}, "approach");
+  constexpr int kRecords = 400;  // about 800 KB of requests
+  for (int k = 0; k < kRecords; ++k) {
+    trail->append({0, 5000 + k, "approach", "ops", "peer", "/pnp.train.v1.TrainingService/X",
+                   std::string(2000, static_cast<char>('a' + k % 26)), "OK"});
+  }
+  trail->flush();
+  const auto read = services::read_remote_audit(address_, {}, 0, 1000);
+  ASSERT_EQ(read.size(), static_cast<std::size_t>(kRecords));
+  for (std::size_t k = 0; k < read.size(); ++k)
+    EXPECT_EQ(read[k].ts_ms, 5000 + static_cast<std::int64_t>(k)) << k;
+  // A limit counts from the newest.
+  const auto newest = services::read_remote_audit(address_, {}, 0, 250);
+  ASSERT_EQ(newest.size(), 250u);
+  EXPECT_EQ(newest.front().ts_ms, 5000 + kRecords - 250);
+  EXPECT_EQ(newest.back().ts_ms, 5000 + kRecords - 1);
+}
+
 TEST_P(StoreService, AuditRefusalsNameTheFieldAndWriteNothing) {
   try {
     services::read_remote_audit(address_, {}, 0, 0);
