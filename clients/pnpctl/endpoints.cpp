@@ -1,6 +1,7 @@
 #include "clients/pnpctl/endpoints.h"
 
 #include "common/error.h"
+#include "services/common/address.h"
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 
@@ -30,7 +31,24 @@ const std::string& Endpoints::address_of(const std::string& service) const {
                          "\"" + service + "\"");
 }
 
+std::string_view Endpoints::flag_of(const std::string& address) const {
+  const std::pair<const std::string*, std::string_view> flags[] = {
+      {&sim, "--sim"},
+      {&approach, "--approach"},
+      {&manipulate, "--manipulate"},
+      {&retract, "--retract"},
+      {&hlc, "--hlc"},
+      {&e2e, "--e2e"},
+      {&inference, "--inference"},
+      {&robot_controller, "--robot-controller"},
+      {&store, "--store"}};
+  for (const auto& [field, flag] : flags)
+    if (*field == address) return flag;
+  return "address";
+}
+
 std::shared_ptr<grpc::Channel> Endpoints::channel(const std::string& address) const {
+  services::validate_address(address, flag_of(address));  // the flag the user typed
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   // Inference replicas are interchangeable: balanced, idempotent calls retried.

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "services/common/transport_security.h"
 
@@ -28,6 +29,9 @@ struct Endpoints {
   // A channel to `address` with the credentials above (INVALID_ARGUMENT naming the flag
   // for a bad address or file).
   std::shared_ptr<grpc::Channel> channel(const std::string& address) const;
+
+  // The flag an address came from ("--sim", ...; "address" for one that is none of them).
+  std::string_view flag_of(const std::string& address) const;
 
   // The training service of a role; INVALID_ARGUMENT for an unknown role.
   const std::string& training(const std::string& role) const;
