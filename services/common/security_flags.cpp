@@ -47,13 +47,16 @@ StreamLimitOptions stream_limit_options(StreamLimitOptions options, double idle_
   return options;
 }
 
+store::AuditTrail::Report audit_failure_report(std::string_view service) {
+  return [service = std::string(service)](const std::string& problem) {
+    log_event(service, "audit_write_failed", {{"error", problem}});
+  };
+}
+
 std::unique_ptr<store::AuditTrail> open_audit_trail(const std::string& db,
                                                     std::string_view service) {
   if (db.empty()) return nullptr;
-  return std::make_unique<store::AuditTrail>(
-      db, [service = std::string(service)](const std::string& problem) {
-        log_event(service, "audit_write_failed", {{"error", problem}});
-      });
+  return std::make_unique<store::AuditTrail>(db, audit_failure_report(service));
 }
 
 ServerSecurity load_server_security(const ServerSecurityFlags& flags, const std::string& address,

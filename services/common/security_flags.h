@@ -42,6 +42,9 @@ ServerSecurity load_server_security(const ServerSecurityFlags& flags, const std:
 // Null for an empty `db`: the JSON log only.
 std::unique_ptr<store::AuditTrail> open_audit_trail(const std::string& db,
                                                     std::string_view service);
+// How every audit trail of `service` reports records it could not write: an
+// audit_write_failed event in the JSON log.
+store::AuditTrail::Report audit_failure_report(std::string_view service);
 
 // `prefix` distinguishes a server's own outgoing connections ("sim-" for a trainer's
 // simulation services: --sim-tls-ca ...); empty for a client's.

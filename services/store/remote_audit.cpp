@@ -4,8 +4,7 @@
 #include <chrono>
 
 #include "pnp/store/v1/store_service.grpc.pb.h"
-#include "services/common/address.h"
-#include "services/common/server_runtime.h"
+#include "services/common/security_flags.h"
 #include "services/common/status.h"
 #include "services/store/remote_store.h"
 #include "services/store/store_convert.h"
@@ -19,8 +18,7 @@ constexpr int kReadPage = 10'000;  // the service's largest limit
 
 std::shared_ptr<store_v1::StoreService::Stub> stub_for(const std::string& address,
                                                        const ClientTlsFiles& tls) {
-  validate_address(address, "--store");  // the flag every caller takes it from
-  return store_v1::StoreService::NewStub(dial(address, tls, store_channel_arguments()));
+  return store_v1::StoreService::NewStub(dial_store(address, tls));
 }
 
 void set_deadline(grpc::ClientContext& context) {
@@ -52,11 +50,8 @@ std::unique_ptr<store::AuditTrail> open_remote_audit_trail(const std::string& ad
       if (request.records_size() > 0) send();
     };
   };
-  return std::make_unique<store::AuditTrail>(
-      std::move(open), "the store server " + address,
-      [service = std::string(service)](const std::string& problem) {
-        log_event(service, "audit_write_failed", {{"error", problem}});
-      });
+  return std::make_unique<store::AuditTrail>(std::move(open), "the store server " + address,
+                                             audit_failure_report(service));
 }
 
 std::vector<store::AuditRecord> read_remote_audit(const std::string& address,

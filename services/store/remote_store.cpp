@@ -59,10 +59,14 @@ grpc::ChannelArguments store_channel_arguments() {
   return args;
 }
 
+std::shared_ptr<grpc::Channel> dial_store(const std::string& address, const ClientTlsFiles& tls) {
+  validate_address(address, "--store");  // the flag every caller takes it from
+  return dial(address, tls, store_channel_arguments());
+}
+
 store::StoreOpener remote_store_opener(const std::string& address, const ClientTlsFiles& tls,
                                        RemoteStoreOptions options) {
-  validate_address(address, "--store");  // the flag every caller takes it from
-  std::shared_ptr<grpc::Channel> channel = dial(address, tls, store_channel_arguments());
+  std::shared_ptr<grpc::Channel> channel = dial_store(address, tls);
   return [channel, address, options]() -> std::unique_ptr<store::Store> {
     return std::make_unique<RemoteStore>(channel, address, options);
   };

@@ -31,6 +31,10 @@ struct RemoteStoreOptions {
 // up to 4 attempts with backoff) and a message cap that fits a checkpoint chunk.
 grpc::ChannelArguments store_channel_arguments();
 
+// A channel to the store server at `address` (validated, named --store in errors), dialled
+// with `tls` and store_channel_arguments().
+std::shared_ptr<grpc::Channel> dial_store(const std::string& address, const ClientTlsFiles& tls);
+
 // Opens RemoteStores that share one channel to the store server at `address`, dialled with
 // `tls` (plaintext when it names no CA). Validates the address and files here.
 store::StoreOpener remote_store_opener(const std::string& address, const ClientTlsFiles& tls,

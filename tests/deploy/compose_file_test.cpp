@@ -13,10 +13,6 @@ namespace {
 
 const std::filesystem::path kDeploy = std::filesystem::path(PNP_SOURCE_DIR) / "deploy";
 
-const std::vector<std::string> kClientFlags = {
-    "--store",   "--sim-address", "--sim", "--approach",  "--manipulate",
-    "--retract", "--hlc",         "--e2e", "--inference", "--controller"};
-
 class ComposeFile : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -65,12 +61,10 @@ TEST_F(ComposeFile, OnlyTheStoreServerHasTheDatabaseAndItsVolume) {
 
 TEST_F(ComposeFile, EveryClientFlagNamesAServiceListeningThere) {
   for (const auto& [name, line] : commands_) {
-    for (const std::string& f : kClientFlags) {
-      const auto target = flag(line, f);
-      if (!target) continue;
-      const std::string host = host_of(*target);
-      ASSERT_TRUE(services_.contains(host)) << name << " " << f << " " << *target;
-      EXPECT_EQ(listening_port(host), port_of(*target)) << name << " " << f << " " << *target;
+    for (const auto& [f, target] : client_targets(line)) {
+      const std::string host = host_of(target);
+      ASSERT_TRUE(services_.contains(host)) << name << " " << f << " " << target;
+      EXPECT_EQ(listening_port(host), port_of(target)) << name << " " << f << " " << target;
     }
   }
 }
@@ -104,12 +98,8 @@ TEST_F(ComposeFile, EveryNameAClientDialsIsOnTheDevelopmentCertificate) {
   const auto names =
       dev_certificate_names(std::filesystem::path(PNP_SOURCE_DIR) / "scripts" / "make-dev-certs");
   for (const auto& [name, line] : commands_) {
-    for (const std::string& f : kClientFlags) {
-      const auto target = flag(line, f);
-      if (target) {
-        EXPECT_TRUE(certificate_covers(names, host_of(*target))) << name << " " << f;
-      }
-    }
+    for (const auto& [f, target] : client_targets(line))
+      EXPECT_TRUE(certificate_covers(names, host_of(target))) << name << " " << f;
   }
 }
 

@@ -15,11 +15,6 @@ namespace {
 
 const std::filesystem::path kK8s = std::filesystem::path(PNP_SOURCE_DIR) / "deploy" / "k8s";
 
-// What a Pod with this command line is a client of: the flags naming another tier.
-const std::vector<std::string> kClientFlags = {"--store",    "--sim-address", "--sim",
-                                               "--approach", "--manipulate",  "--retract",
-                                               "--hlc",      "--e2e",         "--inference"};
-
 class Overlay : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
@@ -160,16 +155,14 @@ TEST_P(Overlay, PortsAgreeWithTheServersFlags) {
     }
     // A client flag names a Service with that port; dns:/// (the client balances over
     // every Pod) needs a headless one.
-    for (const std::string& f : kClientFlags) {
-      const auto target = flag(line, f);
-      if (!target) continue;
-      const YAML::Node* s = service(host_of(*target));
-      ASSERT_NE(s, nullptr) << where << " " << f << "=" << *target << ": no such Service";
+    for (const auto& [f, target] : client_targets(line)) {
+      const YAML::Node* s = service(host_of(target));
+      ASSERT_NE(s, nullptr) << where << " " << f << "=" << target << ": no such Service";
       bool has_port = false;
       for (const auto& p : (*s)["spec"]["ports"])
-        has_port |= p["port"].as<int>() == port_of(*target);
-      EXPECT_TRUE(has_port) << where << " " << f << "=" << *target;
-      if (target->starts_with("dns:///")) {
+        has_port |= p["port"].as<int>() == port_of(target);
+      EXPECT_TRUE(has_port) << where << " " << f << "=" << target;
+      if (target.starts_with("dns:///")) {
         EXPECT_EQ((*s)["spec"]["clusterIP"].as<std::string>(""), "None") << where << " " << f;
       }
     }
@@ -204,14 +197,12 @@ TEST_P(Overlay, NetworkPoliciesAllowExactlyTheEdgesTheFlagsNeed) {
   std::map<std::string, std::set<std::string>> clients_of;  // server workload -> clients
   for_each_container([&](const Workload& w, const YAML::Node& c) {
     const auto line = command_line(c);
-    for (const std::string& f : kClientFlags) {
-      const auto target = flag(line, f);
-      if (!target) continue;
-      const YAML::Node* s = service(host_of(*target));
-      ASSERT_NE(s, nullptr) << *target;
+    for (const auto& [f, target] : client_targets(line)) {
+      const YAML::Node* s = service(host_of(target));
+      ASSERT_NE(s, nullptr) << target;
       for (const Workload* server : selected_by(labels_of((*s)["spec"]["selector"]))) {
-        EXPECT_TRUE(may_connect(policies, w.pod_labels, server->pod_labels, port_of(*target)))
-            << w.name << " cannot reach " << server->name << " for " << f << "=" << *target;
+        EXPECT_TRUE(may_connect(policies, w.pod_labels, server->pod_labels, port_of(target)))
+            << w.name << " cannot reach " << server->name << " for " << f << "=" << target;
         clients_of[server->name].insert(w.name);
       }
     }
@@ -267,10 +258,8 @@ TEST_P(Overlay, EveryNameAClientDialsIsOnTheDevelopmentCertificate) {
       dev_certificate_names(std::filesystem::path(PNP_SOURCE_DIR) / "scripts" / "make-dev-certs");
   for_each_container([&](const Workload& w, const YAML::Node& c) {
     const auto line = command_line(c);
-    for (const std::string& f : kClientFlags) {
-      const auto target = flag(line, f);
-      if (!target) continue;
-      const std::string host = host_of(*target);
+    for (const auto& [f, target] : client_targets(line)) {
+      const std::string host = host_of(target);
       EXPECT_TRUE(certificate_covers(names, host)) << w.name << " dials " << host;
       EXPECT_TRUE(certificate_covers(names, host + ".pnp")) << host << ".pnp";
       EXPECT_TRUE(certificate_covers(names, host + ".pnp.svc.cluster.local")) << host;

@@ -146,6 +146,21 @@ YAML::Node with_merge_keys(const YAML::Node& map) {
   return out;
 }
 
+const std::vector<std::string>& client_flags() {
+  static const std::vector<std::string> flags = {
+      "--store",   "--sim-address", "--sim", "--approach",  "--manipulate",
+      "--retract", "--hlc",         "--e2e", "--inference", "--controller"};
+  return flags;
+}
+
+std::vector<std::pair<std::string, std::string>> client_targets(
+    const std::vector<std::string>& line) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const std::string& f : client_flags())
+    if (const auto target = flag(line, f)) out.emplace_back(f, *target);
+  return out;
+}
+
 std::vector<int> container_ports(const YAML::Node& container) {
   std::vector<int> out;
   if (container["ports"])

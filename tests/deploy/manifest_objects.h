@@ -46,6 +46,12 @@ bool selects(const Labels& selector, const Labels& labels);  // an empty selecto
 // `--flag value`) in it.
 std::vector<std::string> command_line(const YAML::Node& container);
 std::optional<std::string> flag(const std::vector<std::string>& line, const std::string& name);
+// The flags by which one server or client names another tier (the servers' --store and
+// --sim-address, pnpctl's --sim ... --inference, the gateway's --controller), and the
+// (flag, target) pairs of a command line.
+const std::vector<std::string>& client_flags();
+std::vector<std::pair<std::string, std::string>> client_targets(
+    const std::vector<std::string>& line);
 std::vector<int> container_ports(const YAML::Node& container);
 // A map with its YAML merge key (`<<: *anchor`) applied: yaml-cpp leaves it as a key.
 YAML::Node with_merge_keys(const YAML::Node& map);
