@@ -108,8 +108,10 @@ int main(int argc, char** argv) {
     const auto threads = static_cast<std::size_t>(workers);
     const TrainingRun local_training = train({}, train_steps, threads);
     const TrainingRun remote_training = train(
-        [&](sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world) {
-          return std::make_unique<sim_client::RemoteEnvFactory>(addresses, robot, object, world);
+        [&](sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
+            sim::Actuation actuation) {
+          return std::make_unique<sim_client::RemoteEnvFactory>(addresses, robot, object, world,
+                                                                actuation);
         },
         train_steps, threads);
     server.shutdown(std::chrono::milliseconds(500));

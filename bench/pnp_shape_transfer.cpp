@@ -39,6 +39,7 @@ namespace fs = std::filesystem;
 
 struct Options {
   std::string preset, world{sim::world_profile_name(sim::kDefaultWorldProfile)};
+  std::string actuation = "default";  // the Panda's own
   bool show_preset = false, skip_e2e = false;
   std::uint64_t seed = 0, gateway_seed = 880000;
   int episodes = 200;
@@ -115,7 +116,10 @@ void run(Options o, training::Preset preset) {
                             o.fine_tune_gripper_commitment,
                             [](const std::string& label, const rl::CurvePoint& p) {
                               tools::print_progress(stderr, label, p);
-                            }};
+                            },
+                            o.actuation == "default"
+                                ? sim::default_actuation(sim::Robot::kPanda)
+                                : sim::parse_actuation(o.actuation, "--actuation")};
   // The extra row's roles in training order, retract among them.
   std::vector<std::string> extra;
   for (const char* role : bench::kHierarchyRoles) {
@@ -214,6 +218,7 @@ void run(Options o, training::Preset preset) {
        {{"preset", preset.name},
         {"uses_demonstrations", preset.uses_demonstrations},
         {"world", o.world},
+        {"actuation", sim::actuation_name(t.actuation)},
         {"robot", "panda"},
         {"episodes_per_cell", o.episodes},
         {"fine_tune_max_steps", o.fine_tune_max_steps},
@@ -251,6 +256,10 @@ int main(int argc, char** argv) {
   Options o;
   tools::add_preset_options(app, o.preset, o.show_preset);
   app.add_option("--world", o.world, "world profile: paper or gym (docs/SIMULATION.md)")
+      ->capture_default_str();
+  app.add_option("--actuation", o.actuation,
+                 "how the hand follows actions in training: mocap, arm or default (the Panda's "
+                 "own: docs/SIMULATION.md)")
       ->capture_default_str();
   app.add_option("--seed", o.seed, "training seed (every role)")->capture_default_str();
   app.add_option("--episodes", o.episodes, "gateway episodes per cell")->capture_default_str();

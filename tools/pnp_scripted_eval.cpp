@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "arm_sim/arm_env_factory.h"
 #include "common/error.h"
 #include "common/validate.h"
 #include "nn/checkpoint_io.h"
@@ -29,6 +30,7 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
                                               {"mean_steps", r.subtask_mean_steps[k]}};
   }
   return {{"world", world_profile_name(r.world)},
+          {"actuation", actuation_name(r.actuation)},
           {"robot", robot_name(r.robot)},
           {"object", object_name(r.object)},
           {"seed", r.seed},
@@ -47,8 +49,9 @@ nlohmann::json to_json(const pnp::sim::ScriptedEvalReport& r) {
 }
 
 void print_cell(const pnp::sim::ScriptedEvalReport& r) {
-  std::printf("world %s, robot %s, object %s, seed %llu, %d episodes\n",
+  std::printf("world %s (%s), robot %s, object %s, seed %llu, %d episodes\n",
               std::string(pnp::sim::world_profile_name(r.world)).c_str(),
+              std::string(pnp::sim::actuation_name(r.actuation)).c_str(),
               std::string(pnp::sim::robot_name(r.robot)).c_str(),
               std::string(pnp::sim::object_name(r.object)).c_str(),
               static_cast<unsigned long long>(r.seed), r.episodes);
@@ -68,11 +71,12 @@ void print_cell(const pnp::sim::ScriptedEvalReport& r) {
 }
 
 void print_summary_table(const std::vector<pnp::sim::ScriptedEvalReport>& reports) {
-  std::printf("%-6s %-7s %-12s %9s %9s %15s %13s %7s\n", "world", "robot", "object", "episodes",
-              "success", "95% CI", "active steps", "faults");
+  std::printf("%-6s %-6s %-7s %-12s %9s %9s %15s %13s %7s\n", "world", "hand", "robot", "object",
+              "episodes", "success", "95% CI", "active steps", "faults");
   for (const auto& r : reports) {
-    std::printf("%-6s %-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
+    std::printf("%-6s %-6s %-7s %-12s %9d %9.3f    %.3f-%.3f %7.1f +- %3.1f %7d\n",
                 std::string(pnp::sim::world_profile_name(r.world)).c_str(),
+                std::string(pnp::sim::actuation_name(r.actuation)).c_str(),
                 std::string(pnp::sim::robot_name(r.robot)).c_str(),
                 std::string(pnp::sim::object_name(r.object)).c_str(), r.episodes, r.success_rate,
                 r.success_ci95_low, r.success_ci95_high, r.mean_steps, r.std_steps,
@@ -111,25 +115,32 @@ std::vector<std::unique_ptr<pnp::sim::SubtaskPolicy>> load_experts(const std::st
   return out;
 }
 
-pnp::sim::ScriptedEvalReport evaluate_experts(pnp::sim::WorldProfile world, pnp::sim::Robot robot,
-                                              pnp::sim::ObjectShape object, const std::string& list,
-                                              long long episodes, std::uint64_t seed,
-                                              std::size_t threads) {
+// One world to evaluate in.
+struct Cell {
+  pnp::sim::WorldProfile world;
+  pnp::sim::Robot robot;
+  pnp::sim::ObjectShape object;
+  pnp::sim::Actuation actuation;
+  std::unique_ptr<pnp::sim::EnvFactory> envs() const {
+    return pnp::arm_sim::make_env_factory(robot, object, world, actuation);
+  }
+};
+
+// --experts empty: the scripted experts.
+pnp::sim::ScriptedEvalReport evaluate(const Cell& cell, const std::string& list, long long episodes,
+                                      std::uint64_t seed, std::size_t threads) {
   using namespace pnp;
-  const auto experts = load_experts(list);
-  const sim::LocalEnvFactory envs(sim::WorldModel::load(robot, object, world));
+  const auto experts = load_experts(list.empty() ? "scripted,scripted,scripted" : list);
   ThreadPool pool(threads);
-  return sim::evaluate_pipeline(envs, {experts[0].get(), experts[1].get(), experts[2].get()},
-                                episodes, seed, pool);
+  return sim::evaluate_pipeline(
+      *cell.envs(), {experts[0].get(), experts[1].get(), experts[2].get()}, episodes, seed, pool);
 }
 
 // Replays episode `index` of the evaluation (same seed derivation) and prints every step.
-void trace_episode(pnp::sim::WorldProfile world, pnp::sim::Robot robot,
-                   pnp::sim::ObjectShape object, const std::string& list, std::uint64_t seed,
-                   long long index) {
+void trace_episode(const Cell& cell, const std::string& list, std::uint64_t seed, long long index) {
   using namespace pnp;
   const auto experts = load_experts(list.empty() ? "scripted,scripted,scripted" : list);
-  const auto env = sim::LocalEnvFactory(sim::WorldModel::load(robot, object, world)).make();
+  const auto env = cell.envs()->make();
   const std::uint64_t episode_seed = derive_seed(seed, static_cast<std::uint64_t>(index));
   std::printf(
       "episode %lld (seed %llu): step subtask | action xyz grip | gripper | object | "
@@ -159,6 +170,7 @@ int main(int argc, char** argv) {
   std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   std::string robot = "fetch";
   std::string object = "block";
+  std::string actuation = "default";
   long long episodes = 100;
   std::uint64_t seed = 0;
   std::size_t threads = 0;
@@ -172,6 +184,10 @@ int main(int argc, char** argv) {
   app.add_option("--world", world, "world profile: paper, gym or all (docs/SIMULATION.md)")
       ->capture_default_str();
   app.add_option("--robot", robot, "fetch, panda or all")->capture_default_str();
+  app.add_option("--actuation", actuation,
+                 "how the hand follows actions: mocap, arm (the Panda only), all, or default "
+                 "(each robot's own: docs/SIMULATION.md)")
+      ->capture_default_str();
   app.add_option("--object", object, "block, small_block, cylinder or all")->capture_default_str();
   app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")
       ->capture_default_str();
@@ -187,23 +203,37 @@ int main(int argc, char** argv) {
     const auto robots = select(robot, pnp::sim::kAllRobots, &pnp::sim::parse_robot, "--robot");
     const auto objects =
         select(object, pnp::sim::kAllObjectShapes, &pnp::sim::parse_object, "--object");
-    if (trace >= 0) {
-      if (worlds.size() != 1 || robots.size() != 1 || objects.size() != 1)
-        pnp::throw_invalid_argument("--trace", "one --world, one --robot and one --object",
-                                    "\"all\"");
-      trace_episode(worlds.front(), robots.front(), objects.front(), experts, seed, trace);
-      return;
-    }
-    std::vector<pnp::sim::ScriptedEvalReport> reports;
+    std::vector<Cell> cells;
     for (auto w : worlds) {
       for (auto r : robots) {
+        // "default": the robot's own; "all": every actuation the robot has.
+        std::vector<pnp::sim::Actuation> hands;
+        if (actuation == "default") {
+          hands = {pnp::sim::default_actuation(r)};
+        } else if (actuation == "all") {
+          for (auto a : pnp::sim::kAllActuations) {
+            if (a == pnp::sim::Actuation::kMocap || r == pnp::sim::Robot::kPanda)
+              hands.push_back(a);
+          }
+        } else {
+          hands = {pnp::sim::parse_actuation(actuation, "--actuation")};
+          pnp::sim::require_supported(r, hands.front(), "--actuation");
+        }
         for (auto o : objects) {
-          reports.push_back(experts.empty()
-                                ? pnp::sim::evaluate_scripted(r, o, episodes, seed, threads, w)
-                                : evaluate_experts(w, r, o, experts, episodes, seed, threads));
+          for (auto a : hands) cells.push_back({w, r, o, a});
         }
       }
     }
+    if (trace >= 0) {
+      if (cells.size() != 1)
+        pnp::throw_invalid_argument("--trace", "one --world, --robot, --object and --actuation",
+                                    "\"all\"");
+      trace_episode(cells.front(), experts, seed, trace);
+      return;
+    }
+    std::vector<pnp::sim::ScriptedEvalReport> reports;
+    for (const Cell& cell : cells)
+      reports.push_back(evaluate(cell, experts, episodes, seed, threads));
     if (reports.size() == 1) {
       if (json) {
         std::cout << to_json(reports.front()).dump() << "\n";
@@ -213,9 +243,9 @@ int main(int argc, char** argv) {
       return;
     }
     if (json) {
-      nlohmann::json cells = nlohmann::json::array();
-      for (const auto& r : reports) cells.push_back(to_json(r));
-      std::cout << nlohmann::json{{"cells", cells}}.dump() << "\n";
+      nlohmann::json out = nlohmann::json::array();
+      for (const auto& r : reports) out.push_back(to_json(r));
+      std::cout << nlohmann::json{{"cells", out}}.dump() << "\n";
     } else {
       print_summary_table(reports);
     }

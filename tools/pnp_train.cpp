@@ -30,6 +30,7 @@ struct Options {
   training::TrainingSpec spec;
   std::string robot = "fetch", object = "block", out = "runs/latest";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
+  std::string actuation = "default";  // the robot's own (sim/actuation.h)
   std::string init, experts, prefix, activation, preset;
   bool json = false, quiet = false, show_preset = false;
   std::size_t threads = 0;
@@ -153,6 +154,9 @@ nlohmann::json train(Options& o) {
   o.spec.ddpg.hidden_activation = nn::parse_activation(o.activation, "--activation");
   o.spec.object = sim::parse_object(o.object, "--object");
   o.spec.world = sim::parse_world_profile(o.world, "--world");
+  o.spec.actuation = o.actuation == "default" ? sim::default_actuation(o.spec.robot)
+                                              : sim::parse_actuation(o.actuation, "--actuation");
+  sim::require_supported(o.spec.robot, o.spec.actuation, "--actuation");
   training::TrainingInputs inputs;
   if (!o.init.empty()) inputs.init = nn::read_file(o.init);
   std::vector<std::string> experts;
@@ -176,6 +180,7 @@ nlohmann::json train(Options& o) {
   summary["robot"] = o.robot;
   summary["object"] = o.object;
   summary["world"] = o.world;
+  summary["actuation"] = sim::actuation_name(o.spec.actuation);
   summary["seed"] = o.spec.seed;
   summary["preset"] = o.preset;
   summary["uses_demonstrations"] = o.spec.ddpg.demo_episodes > 0;
@@ -209,12 +214,12 @@ void print_summary(const Options& o, const nlohmann::json& s) {
         s.at("cancelled").get<bool>() ? " (cancelled)" : " (the step cap)", wall);
   }
   std::printf(
-      "  preset %s, %s, %s world, %s/%s, seed %llu, GEMM path %s; checkpoint %s (the whole "
-      "result: %s/%s.json, or --json)\n",
-      o.preset.c_str(), o.spec.algorithm.c_str(), o.world.c_str(), o.robot.c_str(),
-      o.object.c_str(), static_cast<unsigned long long>(o.spec.seed),
-      s.at("gemm_path").get<std::string>().c_str(), s.at("checkpoint").get<std::string>().c_str(),
-      o.out.c_str(), o.spec.role.c_str());
+      "  preset %s, %s, %s world (%s hand), %s/%s, seed %llu, GEMM path %s; checkpoint %s (the "
+      "whole result: %s/%s.json, or --json)\n",
+      o.preset.c_str(), o.spec.algorithm.c_str(), o.world.c_str(),
+      std::string(sim::actuation_name(o.spec.actuation)).c_str(), o.robot.c_str(), o.object.c_str(),
+      static_cast<unsigned long long>(o.spec.seed), s.at("gemm_path").get<std::string>().c_str(),
+      s.at("checkpoint").get<std::string>().c_str(), o.out.c_str(), o.spec.role.c_str());
 }
 
 }  // namespace
@@ -231,6 +236,10 @@ int main(int argc, char** argv) {
   app.add_option("--robot", o.robot)->capture_default_str();
   app.add_option("--object", o.object)->capture_default_str();
   app.add_option("--world", o.world, "world profile: paper or gym (docs/SIMULATION.md)")
+      ->capture_default_str();
+  app.add_option("--actuation", o.actuation,
+                 "how the hand follows actions: mocap (gym's), arm (the Panda's controller) or "
+                 "default (the robot's own: docs/SIMULATION.md)")
       ->capture_default_str();
   app.add_option("--seed", o.spec.seed)->capture_default_str();
   app.add_option("--max-steps", o.spec.stop.max_steps, "training environment steps cap")

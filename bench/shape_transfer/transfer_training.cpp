@@ -22,6 +22,7 @@ training::Blob train_hierarchy_role(const TransferTraining& t, const std::string
   spec.robot = sim::Robot::kPanda;
   spec.object = object;
   spec.world = t.world;
+  spec.actuation = t.actuation;
   spec.seed = t.seed;
   if (max_steps > 0) spec.stop.max_steps = max_steps;
   if (!t.hidden.empty()) spec.ddpg.hidden = t.hidden;
@@ -76,6 +77,7 @@ training::Blob train_end_to_end(const TransferTraining& t, long long max_steps,
   spec.robot = sim::Robot::kPanda;
   spec.object = sim::ObjectShape::kBlock;
   spec.world = t.world;
+  spec.actuation = t.actuation;
   spec.seed = t.seed;
   spec.stop.max_steps = max_steps;
   if (!t.hidden.empty()) spec.ddpg.hidden = t.hidden;

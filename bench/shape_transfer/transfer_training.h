@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "rl/training_progress.h"
+#include "sim/actuation.h"
 #include "sim/object_shape.h"
 #include "sim/subtask.h"
 #include "sim/world_profile.h"
@@ -48,6 +49,7 @@ struct TransferTraining {
   // new shape only; the block hierarchy and end-to-end train with the preset's.
   double fine_tune_gripper_commitment = 0;
   std::function<void(const std::string& label, const rl::CurvePoint&)> progress;
+  sim::Actuation actuation = sim::default_actuation(sim::Robot::kPanda);  // every role's
 };
 
 // The block hierarchy on the Panda, trained as the preset says (chained or scripted

@@ -178,7 +178,7 @@ void DashboardServer::routes() {
       if (serving.ready) {
         try {
           const ServedWorld w = player_.served_world();
-          serving.world = w.world + "/" + w.robot + "/" + w.object;
+          serving.world = w.world + "/" + w.robot + "/" + w.object + " (" + w.actuation + " hand)";
         } catch (const Error&) {  // the page still shows what the store says
         }
       }

@@ -137,6 +137,10 @@ ServedWorld EpisodePlayer::served_world() {
     out.robot = sim::robot_name(services::from_proto(role.robot(), "robot"));
     out.object = sim::object_name(services::from_proto(role.object(), "object"));
     out.world = sim::world_profile_name(services::from_proto(role.world(), "world"));
+    // Unset: a server from before the actuation was kept (its policies were mocap-trained).
+    out.actuation =
+        sim::actuation_name(role.actuation() == common::v1::ACTUATION_ARM ? sim::Actuation::kArm
+                                                                          : sim::Actuation::kMocap);
   }
   return out;
 }
@@ -154,6 +158,7 @@ PlayedEpisodes EpisodePlayer::play(int count, std::uint64_t seed) {
   create.set_robot(services::to_proto(sim::parse_robot(out.world.robot)));
   create.set_object(services::to_proto(sim::parse_object(out.world.object)));
   create.set_world(services::to_proto(sim::parse_world_profile(out.world.world)));
+  create.set_actuation(services::to_proto(sim::parse_actuation(out.world.actuation)));
   create.set_seed(seed);
   create.set_count(1);
   sv1::CreateEnvResponse created;

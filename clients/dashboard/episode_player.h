@@ -16,6 +16,7 @@ namespace pnp::dashboard {
 
 struct ServedWorld {
   std::string robot = "fetch", object = "block", world = "gym";  // the choreographer's
+  std::string actuation = "mocap";  // how its hand followed actions in training
 };
 
 struct PlayedEpisodes {

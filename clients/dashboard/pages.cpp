@@ -114,14 +114,16 @@ std::string run_page(const store::RunRecord& run,
 std::string episodes_page(const PlayedEpisodes& played) {
   std::string body = fmt::format(
       "<p id=\"summary\" data-episodes=\"{}\" data-successes=\"{}\">{} of {} held-out episodes "
-      "placed ({}/{}/{}, seed {}): the served hierarchy, through the simulation and inference "
+      "placed ({}/{}/{}, {} hand, seed {}): the served hierarchy, through the simulation and "
+      "inference "
       "services. The gripper's path is coloured by the subtask the choreographer chose.</p>\n"
       "<form><label>episodes <input name=\"count\" value=\"{}\" size=\"3\"></label> "
       "<label>seed <input name=\"seed\" value=\"{}\" size=\"8\"></label> "
       "<button>play</button></form>\n",
       played.episodes.size(), played.successes, played.successes, played.episodes.size(),
       escape_xml(played.world.world), escape_xml(played.world.robot),
-      escape_xml(played.world.object), played.seed, played.episodes.size(), played.seed);
+      escape_xml(played.world.object), escape_xml(played.world.actuation), played.seed,
+      played.episodes.size(), played.seed);
   for (const auto& e : played.episodes) body += "<div>" + plot::episode_view_svg(e) + "</div>\n";
   return page("Episodes", body);
 }

@@ -21,6 +21,7 @@ struct TrainArgs {
   std::string algorithm;  // empty: ddpg_her for experts and e2e, a3c for hlc
   std::string robot = "fetch", object = "block";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};  // docs/SIMULATION.md
+  std::string actuation = "default";             // mocap, arm or the robot's own (sim/actuation.h)
   std::string preset{training::kDefaultPreset};  // training/preset.h; unset fields take its values
   std::uint64_t seed = 0;
   long long max_steps = 0;
@@ -87,6 +88,7 @@ struct PredictArgs {
   std::uint64_t seed = 0;                 // the first observation of the sim's episode
   std::string robot = "fetch", object = "block";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
+  std::string actuation = "default";
 };
 int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 // Checks the named services (sim, approach, manipulate, retract, hlc, e2e, inference);
@@ -96,13 +98,14 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
 struct EvaluateArgs {
   std::string robot = "fetch", object = "block";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
+  std::string actuation = "default";
   int episodes = 100;
   std::uint64_t seed = 424242;  // the held-out episodes' seed (no training run uses it)
   bool json = false;
   bool strict = false;  // refuse, rather than warn, when the served policy's world differs
 };
 // Warns (strict: refuses, FAILED_PRECONDITION) when a served role was trained on another
-// world, robot or object than the evaluation's.
+// world, robot, object or actuation than the evaluation's.
 int evaluate_command(const Endpoints& endpoints, const EvaluateArgs& args);
 
 struct PipelineArgs {

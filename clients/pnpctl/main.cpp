@@ -41,6 +41,10 @@ CLI::Validator success_rate() {
 
 using namespace pnp::pnpctl;
 
+constexpr const char* kActuationHelp =
+    "how the hand follows actions: mocap (gym's), arm (the Panda's controller) or default (the "
+    "robot's own: docs/SIMULATION.md)";
+
 void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   if (with_role)
     cmd.add_option("--role", a.role, "approach, manipulate, retract, hlc or e2e")
@@ -50,6 +54,7 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   cmd.add_option("--object", a.object)->capture_default_str();
   cmd.add_option("--world", a.world, "world profile: paper or gym (docs/SIMULATION.md)")
       ->capture_default_str();
+  cmd.add_option("--actuation", a.actuation, kActuationHelp)->capture_default_str();
   cmd.add_option("--seed", a.seed)->capture_default_str();
   std::vector<std::string> presets;
   for (const auto& p : pnp::training::presets()) presets.emplace_back(p.name);
@@ -209,6 +214,7 @@ int main(int argc, char** argv) {
   predict_cmd->add_option("--robot", predict.robot)->capture_default_str();
   predict_cmd->add_option("--object", predict.object)->capture_default_str();
   predict_cmd->add_option("--world", predict.world)->capture_default_str();
+  predict_cmd->add_option("--actuation", predict.actuation, kActuationHelp)->capture_default_str();
   predict_cmd->callback([&] { command = [&] { return predict_command(endpoints, predict); }; });
 
   std::vector<std::string> services(std::begin(kAllServices), std::end(kAllServices));
@@ -228,10 +234,12 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--object", evaluate.object)->capture_default_str();
   evaluate_cmd->add_option("--world", evaluate.world, "world profile: paper or gym")
       ->capture_default_str();
+  evaluate_cmd->add_option("--actuation", evaluate.actuation, kActuationHelp)
+      ->capture_default_str();
   evaluate_cmd->add_flag("--json", evaluate.json);
   evaluate_cmd->add_flag("--strict", evaluate.strict,
-                         "refuse when the served policy was trained on another world, robot or "
-                         "object");
+                         "refuse when the served policy was trained on another world, robot, "
+                         "object or actuation");
   evaluate_cmd->callback([&] { command = [&] { return evaluate_command(endpoints, evaluate); }; });
 
   PipelineArgs pipeline;
@@ -256,6 +264,7 @@ int main(int argc, char** argv) {
     c.robot = e.robot;
     c.object = e.object;
     c.world = e.world;
+    c.actuation = e.actuation;
     c.seed = e.seed;
     c.preset = e.preset;
     c.target_success = e.target_success;

@@ -98,6 +98,9 @@ void wait_until_served(const Endpoints& endpoints, std::int64_t hlc_checkpoint, 
 }  // namespace
 
 int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
+  // Checked before anything trains; printed as resolved ("default" is the robot's own).
+  const std::string actuation(sim::actuation_name(
+      resolve_actuation(args.experts.actuation, args.experts.robot, "--actuation")));
   wait_until_healthy(endpoints, {"sim", "approach", "manipulate", "retract", "hlc", "inference"},
                      args.wait_s);
   std::vector<RoleResult> results;
@@ -123,7 +126,8 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   const ServiceEvaluation held_out = evaluate_through_services(
       endpoints,
       {parse_robot(args.experts.robot, "--robot"), parse_object(args.experts.object, "--object"),
-       parse_world(args.experts.world, "--world")},
+       parse_world(args.experts.world, "--world"),
+       parse_actuation(args.experts.actuation, args.experts.robot, "--actuation")},
       args.eval_episodes, args.eval_seed);
 
   Table table({"role", "run", "state", "steps", "to_target", "score", "target", "final_success",
@@ -165,15 +169,18 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   std::printf("\n");
   table.print(stdout);
   std::printf(
-      "\nheld-out through the services: success %.3f over %d episodes (seed %llu, %s/%s/%s)",
+      "\nheld-out through the services: success %.3f over %d episodes (seed %llu, %s/%s/%s, %s "
+      "hand)",
       held_out.success_rate(), held_out.episodes, static_cast<unsigned long long>(args.eval_seed),
-      args.experts.world.c_str(), args.experts.robot.c_str(), args.experts.object.c_str());
+      args.experts.world.c_str(), args.experts.robot.c_str(), args.experts.object.c_str(),
+      actuation.c_str());
   if (!held_out.sequences.empty())
     std::printf(", choices %s x%d", held_out.sequences.front().first.c_str(),
                 held_out.sequences.front().second);
   std::printf("\n");
   if (!args.json_out.empty()) {
     const nlohmann::json out = {{"world", args.experts.world},
+                                {"actuation", actuation},
                                 {"robot", args.experts.robot},
                                 {"object", args.experts.object},
                                 {"roles", json_roles},

@@ -5,6 +5,7 @@
 
 #include "common/error.h"
 #include "services/common/address.h"
+#include "services/common/convert.h"
 #include "services/common/status.h"
 
 namespace pnp::pnpctl {
@@ -68,6 +69,21 @@ common::v1::ObjectShape parse_object(const std::string& name, std::string_view f
 }
 common::v1::World parse_world(const std::string& name, std::string_view field) {
   return parse_enum<common::v1::World>(common::v1::World_descriptor(), "WORLD_", name, field);
+}
+sim::Actuation resolve_actuation(const std::string& name, const std::string& robot,
+                                 std::string_view field) {
+  const sim::Robot arm = services::from_proto(parse_robot(robot, "--robot"), "--robot");
+  if (name != "default" && name != "mocap" && name != "arm") {
+    throw_invalid_argument(field, "one of default, mocap, arm", "\"" + name + "\"");
+  }
+  const sim::Actuation actuation =
+      name == "default" ? sim::default_actuation(arm) : sim::parse_actuation(name, field);
+  sim::require_supported(arm, actuation, field);
+  return actuation;
+}
+common::v1::Actuation parse_actuation(const std::string& name, const std::string& robot,
+                                      std::string_view field) {
+  return services::to_proto(resolve_actuation(name, robot, field));
 }
 train::v1::RunState parse_state(const std::string& name, std::string_view field) {
   return parse_enum<train::v1::RunState>(train::v1::RunState_descriptor(), "RUN_STATE_", name,

@@ -11,6 +11,7 @@
 
 #include "pnp/common/v1/common.pb.h"
 #include "pnp/train/v1/train_service.pb.h"
+#include "sim/actuation.h"
 
 namespace pnp::pnpctl {
 
@@ -27,6 +28,13 @@ train::v1::Algorithm parse_algorithm(const std::string& name, std::string_view f
 common::v1::Robot parse_robot(const std::string& name, std::string_view field);
 common::v1::ObjectShape parse_object(const std::string& name, std::string_view field);
 common::v1::World parse_world(const std::string& name, std::string_view field);
+// "mocap" or "arm", or "default": the robot's own (sim::default_actuation), resolved here
+// so that what is printed names what runs. The robot is a --robot value (checked first);
+// an actuation the robot does not have is INVALID_ARGUMENT naming `field`.
+sim::Actuation resolve_actuation(const std::string& name, const std::string& robot,
+                                 std::string_view field);
+common::v1::Actuation parse_actuation(const std::string& name, const std::string& robot,
+                                      std::string_view field);
 train::v1::RunState parse_state(const std::string& name, std::string_view field);
 
 // "approach" for ROLE_APPROACH, "running" for RUN_STATE_RUNNING...

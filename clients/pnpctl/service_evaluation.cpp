@@ -109,6 +109,7 @@ ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const Se
   create.set_robot(world.robot);
   create.set_object(world.object);
   create.set_world(world.world);
+  create.set_actuation(world.actuation);
   create.set_seed(seed);
   create.set_count(1);
   sim::v1::CreateEnvResponse created;

@@ -32,6 +32,7 @@ struct ServiceWorld {
   common::v1::Robot robot = common::v1::ROBOT_FETCH;
   common::v1::ObjectShape object = common::v1::OBJECT_SHAPE_BLOCK;
   common::v1::World world = common::v1::WORLD_UNSPECIFIED;  // the platform's default, gym
+  common::v1::Actuation actuation = common::v1::ACTUATION_UNSPECIFIED;  // the robot's default
 };
 
 ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const ServiceWorld& world,

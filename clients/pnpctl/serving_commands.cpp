@@ -40,6 +40,7 @@ void observe_from_sim(const Endpoints& endpoints, const PredictArgs& args,
   create.set_robot(parse_robot(args.robot, "--robot"));
   create.set_object(parse_object(args.object, "--object"));
   create.set_world(parse_world(args.world, "--world"));
+  create.set_actuation(parse_actuation(args.actuation, args.robot, "--actuation"));
   create.set_seed(args.seed);
   create.set_count(1);
   sim::v1::CreateEnvResponse created;
@@ -123,9 +124,10 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
 namespace {
 
 // The served roles trained on another world than the one to evaluate on, as "hlc
-// (gym/fetch/block)"; empty if none. A mismatch can be deliberate (a retract fine-tuned for
-// another shape), so it is a warning unless --strict.
-std::string served_world_mismatch(const Endpoints& endpoints, const EvaluateArgs& args) {
+// (gym/fetch/block, mocap hand)"; empty if none. A mismatch can be deliberate (a retract
+// fine-tuned for another shape), so it is a warning unless --strict.
+std::string served_world_mismatch(const Endpoints& endpoints, const EvaluateArgs& args,
+                                  const std::string& actuation) {
   auto stub = policy::v1::PolicyService::NewStub(endpoints.channel(endpoints.inference));
   policy::v1::GetServingStatusResponse status;
   check(stub->GetServingStatus(context_with_deadline().get(), {}, &status), "GetServingStatus",
@@ -137,10 +139,15 @@ std::string served_world_mismatch(const Endpoints& endpoints, const EvaluateArgs
     const std::string served_object(sim::object_name(services::from_proto(r.object(), "object")));
     const std::string served_world(
         sim::world_profile_name(services::from_proto(r.world(), "world")));
-    if (served_robot == args.robot && served_object == args.object && served_world == args.world)
+    // Unset: a server from before the actuation was kept (its policies were mocap-trained).
+    const std::string served_actuation(
+        sim::actuation_name(r.actuation() == common::v1::ACTUATION_ARM ? sim::Actuation::kArm
+                                                                       : sim::Actuation::kMocap));
+    if (served_robot == args.robot && served_object == args.object && served_world == args.world &&
+        served_actuation == actuation)
       continue;
     out += (out.empty() ? "" : ", ") + short_name(r.role()) + " (" + served_world + "/" +
-           served_robot + "/" + served_object + ")";
+           served_robot + "/" + served_object + ", " + served_actuation + " hand)";
   }
   return out;
 }
@@ -151,10 +158,15 @@ int evaluate_command(const Endpoints& endpoints, const EvaluateArgs& args) {
   // Bad input is refused before any service is asked.
   const ServiceWorld world{parse_robot(args.robot, "--robot"),
                            parse_object(args.object, "--object"),
-                           parse_world(args.world, "--world")};
+                           parse_world(args.world, "--world"),
+                           parse_actuation(args.actuation, args.robot, "--actuation")};
   require_evaluation_episodes(args.episodes);
-  const std::string where = args.world + "/" + args.robot + "/" + args.object;
-  if (const std::string mismatch = served_world_mismatch(endpoints, args); !mismatch.empty()) {
+  const std::string actuation(
+      sim::actuation_name(resolve_actuation(args.actuation, args.robot, "--actuation")));
+  const std::string where =
+      args.world + "/" + args.robot + "/" + args.object + " (" + actuation + " hand)";
+  if (const std::string mismatch = served_world_mismatch(endpoints, args, actuation);
+      !mismatch.empty()) {
     const std::string message =
         "evaluating on " + where + ", but the served policy was trained elsewhere: " + mismatch;
     if (args.strict) throw Error(ErrorCode::kFailedPrecondition, message);

@@ -24,6 +24,7 @@ train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
   r.set_robot(parse_robot(a.robot, "--robot"));
   r.set_object(parse_object(a.object, "--object"));
   r.set_world(parse_world(a.world, "--world"));
+  r.set_actuation(parse_actuation(a.actuation, a.robot, "--actuation"));
   r.set_seed(a.seed);
   r.set_preset(a.preset);
   if (a.max_steps) r.mutable_stop()->set_max_steps(a.max_steps);

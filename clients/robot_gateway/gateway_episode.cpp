@@ -36,12 +36,12 @@ std::chrono::milliseconds millis(double seconds) {
 // say) before the run gives up: nothing moves meanwhile.
 constexpr auto kInferenceStartWait = std::chrono::seconds(10);
 
-// The world the served policy was trained in: its actions are planned the way that world
-// reads them. Waits up to kInferenceStartWait for the service to be reachable (Ctrl-C
-// ends the wait within 100 ms); UNAVAILABLE after that, FAILED_PRECONDITION while no
-// whole policy is served.
-sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy,
-                               const std::atomic<bool>& interrupted) {
+// What the served policy was trained on (its world reads actions: they are planned that
+// way). Waits up to kInferenceStartWait for the service to be reachable (Ctrl-C ends the
+// wait within 100 ms); UNAVAILABLE after that, FAILED_PRECONDITION while no whole policy
+// is served.
+policy::v1::ServedRole served_policy(policy::v1::PolicyService::Stub& policy,
+                                     const std::atomic<bool>& interrupted) {
   const auto give_up = std::chrono::steady_clock::now() + kInferenceStartWait;
   policy::v1::GetServingStatusResponse status;
   grpc::Status rpc;
@@ -66,7 +66,7 @@ sim::WorldProfile served_world(policy::v1::PolicyService::Stub& policy,
     throw Error(ErrorCode::kFailedPrecondition,
                 "the inference service serves no whole policy yet: promote one first");
   }
-  return services::from_proto(status.roles(0).world(), "served world");
+  return status.roles(0);
 }
 
 robot::ControllerReading reading_of(const rv1::ControllerFeedback& state) {
@@ -143,8 +143,32 @@ struct GatewayEpisodeRunner::Episode {
 
 GatewayEpisodeRunner::GatewayEpisodeRunner(const robot::GatewayConfig& config,
                                            ControllerLink& controller,
-                                           policy::v1::PolicyService::Stub& policy, EventLog log)
-    : config_(config), controller_(controller), policy_(policy), log_(std::move(log)) {}
+                                           policy::v1::PolicyService::Stub& policy, EventLog log,
+                                           bool strict)
+    : config_(config),
+      controller_(controller),
+      policy_(policy),
+      log_(std::move(log)),
+      strict_(strict) {}
+
+// A policy meets here what it was trained for only if it was trained on a Panda through
+// the arm's controller: one trained on the mocap hand (which reaches each target within a
+// step) lags on a real arm and succeeds less (docs/RESULTS.md). Warned once per run.
+void GatewayEpisodeRunner::check_served_policy(const policy::v1::ServedRole& served) {
+  if (policy_checked_) return;
+  std::string why;
+  if (served.robot() != common::v1::ROBOT_UNSPECIFIED && served.robot() != common::v1::ROBOT_PANDA)
+    why = "it was trained on robot " + common::v1::Robot_Name(served.robot()) + ", not the Panda";
+  else if (served.actuation() != common::v1::ACTUATION_ARM)
+    why =
+        "it was trained on the mocap hand, not through the arm's controller (train it with "
+        "--actuation arm)";
+  policy_checked_ = true;
+  if (why.empty()) return;
+  const std::string message = "the served policy does not match this arm: " + why;
+  if (strict_) throw Error(ErrorCode::kFailedPrecondition, message + " (--strict)");
+  log_("policy_warning", {{"reason", message}});
+}
 
 // Targets name the policy's grip point; a controller tracking another point (a real
 // Franka Hand left at its default 0.1034 m) would put every grasp 1 cm off.
@@ -169,7 +193,9 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
   sim::WorldProfile world = sim::kDefaultWorldProfile;
   std::optional<std::string> interrupted_early;
   try {
-    world = served_world(policy_, interrupted);
+    const policy::v1::ServedRole served = served_policy(policy_, interrupted);
+    world = services::from_proto(served.world(), "served world");
+    check_served_policy(served);
     check_controller_tcp();
   } catch (const Error& e) {
     if (e.code() != ErrorCode::kCancelled && !interrupted.load()) throw;
@@ -472,17 +498,15 @@ bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
 // still passes the checks from where the arm is commanded now; otherwise nothing (the
 // controller holds by itself). False when the episode must end.
 bool GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback& state) {
-  const geometry::Pose commanded = services::from_proto(state.commanded());
-  const bool can_resend = episode.last_accepted && !episode.options.dry_run &&
-                          robot::check_target(config_.limits, *episode.last_accepted, commanded,
-                                              config_.policy_period_s)
-                              .ok();
-  if (!can_resend) {
+  const std::optional<robot::PoseTarget> again =
+      episode.options.dry_run ? std::nullopt
+                              : robot::hold_target(config_, episode.last_accepted,
+                                                   services::from_proto(state.commanded()));
+  if (!again) {
     ++episode.report.held_without_target;
     return true;
   }
-  const robot::PoseTarget again = *episode.last_accepted;
-  return send_and_take_feedback(episode, again);
+  return send_and_take_feedback(episode, *again);
 }
 
 // False when the episode must end (no answer, a stop, a lost lease).

@@ -81,22 +81,28 @@ struct EpisodeReport {
 
 class GatewayEpisodeRunner {
  public:
-  // Keeps references: `config`, `controller` and `policy` must outlive the runner.
+  // Keeps references: `config`, `controller` and `policy` must outlive the runner. A
+  // served policy trained for another arm (another robot, or the mocap hand rather than
+  // the arm's controller) is warned about once (a "policy_warning" event); `strict`
+  // refuses it instead.
   GatewayEpisodeRunner(const robot::GatewayConfig& config, ControllerLink& controller,
-                       policy::v1::PolicyService::Stub& policy, EventLog log);
+                       policy::v1::PolicyService::Stub& policy, EventLog log, bool strict = false);
   GatewayEpisodeRunner(robot::GatewayConfig&& config, ControllerLink& controller,
-                       policy::v1::PolicyService::Stub& policy, EventLog log) = delete;
+                       policy::v1::PolicyService::Stub& policy, EventLog log,
+                       bool strict = false) = delete;
 
   // Paces cycles to the policy period unless the controller runs in lockstep. Throws
   // (before anything moves) only when the run cannot drive this arm with this policy: no
-  // served policy (FAILED_PRECONDITION, or UNAVAILABLE when inference cannot say), or a
-  // controller whose grip point differs from the policy's (FAILED_PRECONDITION). Every
-  // other fault ends the episode with its reason.
+  // served policy (FAILED_PRECONDITION, or UNAVAILABLE when inference cannot say), a
+  // controller whose grip point differs from the policy's, or (strict) a policy trained
+  // for another arm (FAILED_PRECONDITION). Every other fault ends the episode with its
+  // reason.
   EpisodeReport run(const EpisodeOptions& options, const std::atomic<bool>& interrupted);
 
  private:
   struct Episode;
   void check_controller_tcp();
+  void check_served_policy(const policy::v1::ServedRole& served);
   void run_cycles(Episode& episode);
   bool start_episode(Episode& episode);
   bool cycle(Episode& episode);
@@ -111,8 +117,10 @@ class GatewayEpisodeRunner {
   ControllerLink& controller_;
   policy::v1::PolicyService::Stub& policy_;
   EventLog log_;
+  bool strict_ = false;
   std::uint64_t sequence_ = 0;  // per stream, strictly increasing
   bool tcp_checked_ = false;
+  bool policy_checked_ = false;
 };
 
 }  // namespace pnp::gateway

@@ -2,7 +2,7 @@
 // controller's state, asks the inference service for the next action, changes the target
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
-//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json]
+//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json] [--strict]
 //   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
 // clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once.
@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   int episodes = 5;
   std::uint64_t seed = 1000;
   bool dry_run = false, trace = false, json = false, quiet = false, public_metrics = false;
+  bool strict = false;
   std::string metrics_address;
   app.add_option("--controller", controller_address, "robot controller host:port")
       ->envname("PNP_ROBOT_CONTROLLER_ADDRESS")
@@ -58,7 +59,10 @@ int main(int argc, char** argv) {
   app.add_flag("--trace", trace,
                "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
-  app.add_flag("--quiet", quiet, "no per-event log lines on stderr");
+  app.add_flag("--quiet", quiet, "no per-event log lines on stderr (warnings still)");
+  app.add_flag("--strict", strict,
+               "refuse a served policy trained for another arm (another robot, or the mocap "
+               "hand instead of the arm's controller) instead of warning");
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one, logged as metrics_port; "
                  "empty: off)");
@@ -128,9 +132,9 @@ int main(int argc, char** argv) {
     controller.acquire_lease(name, std::chrono::milliseconds(static_cast<long long>(
                                        std::lround(config.lease_timeout_s * 1000))));
     gateway::EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
-      if (!quiet) services::log_event("gateway", event, fields);
+      if (!quiet || event == "policy_warning") services::log_event("gateway", event, fields);
     };
-    gateway::GatewayEpisodeRunner runner(config, controller, *policy, log);
+    gateway::GatewayEpisodeRunner runner(config, controller, *policy, log, strict);
     std::vector<gateway::EpisodeReport> reports;
     for (int k = 0; k < episodes && !interrupted.load(); ++k) {
       reports.push_back(runner.run({.seed = seed + static_cast<std::uint64_t>(k),

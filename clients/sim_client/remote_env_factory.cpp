@@ -9,12 +9,13 @@ namespace pnp::sim_client {
 
 RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& targets, sim::Robot robot,
                                    sim::ObjectShape object, sim::WorldProfile world,
-                                   const services::ClientTlsFiles& tls,
+                                   sim::Actuation actuation, const services::ClientTlsFiles& tls,
                                    std::chrono::milliseconds connect_timeout)
     : targets_(targets),
       robot_(robot),
       object_(object),
       world_(world),
+      actuation_(actuation),
       tls_(tls),
       connect_timeout_(connect_timeout) {
   if (targets_.empty()) {
@@ -23,6 +24,7 @@ RemoteEnvFactory::RemoteEnvFactory(const std::vector<std::string>& targets, sim:
   }
   // Malformed targets are refused now; whether a name resolves is asked at each make().
   for (const std::string& target : targets_) validate_sim_target(target);
+  sim::require_supported(robot_, actuation_);
   services::validate(tls_);
 }
 
@@ -65,7 +67,7 @@ std::unique_ptr<sim::Environment> RemoteEnvFactory::make() const {
     const SimServerAddress& server = servers[(first + i) % servers.size()];
     try {
       return std::make_unique<RemoteEnvironment>(channel_to(server), server.address, robot_,
-                                                 object_, world_, connect_timeout_);
+                                                 object_, world_, actuation_, connect_timeout_);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kUnavailable) throw;  // includes a deadline passed
       if (!first_failure) first_failure = std::current_exception();

@@ -27,6 +27,7 @@ class RemoteEnvFactory final : public sim::EnvFactory {
   // dialled with `tls` (plaintext by default).
   RemoteEnvFactory(const std::vector<std::string>& targets, sim::Robot robot,
                    sim::ObjectShape object, sim::WorldProfile world = sim::WorldProfile::kPaper,
+                   sim::Actuation actuation = sim::Actuation::kMocap,
                    const services::ClientTlsFiles& tls = {},
                    std::chrono::milliseconds connect_timeout = std::chrono::seconds(10));
   // On the next server in turn; a server that cannot open one (UNAVAILABLE, or no answer
@@ -36,6 +37,7 @@ class RemoteEnvFactory final : public sim::EnvFactory {
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
   sim::WorldProfile profile() const override { return world_; }
+  sim::Actuation actuation() const override { return actuation_; }
 
  private:
   std::vector<SimServerAddress> servers_now() const;
@@ -45,6 +47,7 @@ class RemoteEnvFactory final : public sim::EnvFactory {
   sim::Robot robot_;
   sim::ObjectShape object_;
   sim::WorldProfile world_;
+  sim::Actuation actuation_;
   services::ClientTlsFiles tls_;
   std::chrono::milliseconds connect_timeout_;
   mutable std::atomic<std::size_t> next_{0};

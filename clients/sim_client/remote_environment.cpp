@@ -1,10 +1,10 @@
 #include "clients/sim_client/remote_environment.h"
 
 #include "common/error.h"
-#include "common/validate.h"
 #include "services/common/convert.h"
 #include "services/common/sim_convert.h"
 #include "services/common/status.h"
+#include "sim/step_rules.h"
 #include "sim/world_layout.h"
 
 namespace pnp::sim_client {
@@ -13,7 +13,7 @@ namespace sv1 = pnp::sim::v1;
 
 RemoteEnvironment::RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std::string address,
                                      sim::Robot robot, sim::ObjectShape object,
-                                     sim::WorldProfile world,
+                                     sim::WorldProfile world, sim::Actuation actuation,
                                      std::chrono::milliseconds connect_timeout)
     : stub_(sv1::SimulationService::NewStub(channel)),
       address_(std::move(address)),
@@ -25,6 +25,7 @@ RemoteEnvironment::RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std
   create.set_robot(services::to_proto(robot));
   create.set_object(services::to_proto(object));
   create.set_world(services::to_proto(world));
+  create.set_actuation(services::to_proto(actuation));
   create.set_count(1);
   // The longest idle time allowed: a trainer may pause between uses (updates, evaluations).
   create.mutable_idle_timeout()->set_seconds(3600);
@@ -97,13 +98,7 @@ const sim::Observation& RemoteEnvironment::reset(std::uint64_t seed) {
 
 sim::StepResult RemoteEnvironment::step(std::span<const double> action,
                                         std::span<const double> goal, sim::Objective objective) {
-  require_finite_vector(action, sim::kActionSize, "action");
-  require_finite_vector(goal, sim::kGoalSize, "goal");
-  if (needs_reset_) {
-    throw_failed_precondition(elapsed_steps_ == 0
-                                  ? "step: no episode has started; call reset() first"
-                                  : "step: the episode ended after 50 steps; call reset()");
-  }
+  sim::require_steppable(action, goal, needs_reset_, elapsed_steps_);
   request_.Clear();
   auto& step = *request_.mutable_step();
   step.set_env_id(env_id_);

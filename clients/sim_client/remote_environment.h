@@ -16,6 +16,7 @@
 #include <string>
 
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "sim/actuation.h"
 #include "sim/environment.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
@@ -27,7 +28,7 @@ class RemoteEnvironment final : public sim::Environment {
  public:
   // Creates the environment on the service; `connect_timeout` bounds that call.
   RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std::string address, sim::Robot robot,
-                    sim::ObjectShape object, sim::WorldProfile world,
+                    sim::ObjectShape object, sim::WorldProfile world, sim::Actuation actuation,
                     std::chrono::milliseconds connect_timeout);
   ~RemoteEnvironment() override;  // ends the stream and closes the environment
   RemoteEnvironment(const RemoteEnvironment&) = delete;

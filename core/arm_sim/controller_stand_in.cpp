@@ -11,22 +11,6 @@ namespace {
 
 using robot::LeaseBook;
 
-ControllerStatus status_of(TargetCode code) {
-  switch (code) {
-    case TargetCode::kAccepted:
-      return ControllerStatus::kOk;
-    case TargetCode::kInvalid:
-      return ControllerStatus::kInvalidTarget;
-    case TargetCode::kUnreachable:
-      return ControllerStatus::kUnreachable;
-    case TargetCode::kJointLimit:
-      return ControllerStatus::kJointLimit;
-    case TargetCode::kStopped:
-      return ControllerStatus::kStopped;
-  }
-  throw_internal("unknown target code");
-}
-
 LeaseBook::Clock::duration seconds(double s) {
   return std::chrono::duration_cast<LeaseBook::Clock::duration>(std::chrono::duration<double>(s));
 }
@@ -207,21 +191,15 @@ ControllerReport ControllerStandIn::take_target(const std::string& lease_id,
     refuse(ControllerStatus::kInvalidTarget, std::move(*error));
   } else if (auto stale = stale_error(target)) {
     refuse(ControllerStatus::kStale, std::move(*stale));
-  } else if (auto outside =
-                 target.position_m.allFinite()
-                     ? options_.limits.refusal(target.position_m, arm_.state().commanded_base)
-                     : std::nullopt) {
-    refuse(ControllerStatus::kOutsideLimits, std::move(*outside));
   } else {
-    const double speed = options_.limits.capped_speed(target.max_speed_m_per_s,
-                                                      options_.arm.default_max_speed_m_per_s);
-    const TargetStatus taken =
-        arm_.set_target(target.position_m, target.orientation, target.gripper_width_m, speed);
-    status = status_of(taken.code);
+    IntakeOutcome taken = take_into_arm(
+        arm_, options_.limits,
+        {target.position_m, target.orientation, target.gripper_width_m, target.max_speed_m_per_s});
+    status = taken.status;
     if (taken.accepted()) {
       last_sequence_ = target.sequence;
     } else {
-      errors.push_back(taken.message);
+      errors.push_back(std::move(taken.error));
     }
   }
   if (options_.clock == ClockMode::kLockstep) arm_.advance(options_.arm.policy_period_s);

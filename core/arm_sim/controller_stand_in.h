@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "arm_sim/controller_intake.h"
 #include "arm_sim/controller_limits.h"
 #include "arm_sim/simulated_arm.h"
 #include "robot/lease_book.h"
@@ -48,18 +49,6 @@ struct StandInOptions {
 
 enum class StopKind { kNone, kProtective, kEmergency };
 std::string_view stop_kind_name(StopKind kind);  // "none", "protective", "emergency"
-
-// The outcome of a request, or the controller's condition, as the protocol reports it.
-enum class ControllerStatus {
-  kOk,
-  kInvalidTarget,
-  kUnreachable,
-  kJointLimit,
-  kStopped,
-  kLeaseLost,
-  kOutsideLimits,  // the controller's own workspace, table plane or step limit
-  kStale,          // the target's stamp is too old (or missing)
-};
 
 struct ControllerReport {
   ArmState arm;

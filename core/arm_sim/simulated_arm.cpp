@@ -10,8 +10,8 @@
 #include <string>
 
 #include "common/error.h"
-#include "common/rng.h"
 #include "sim/inverse_kinematics.h"
+#include "sim/physics_fault.h"
 #include "sim/subtask.h"
 #include "sim/task_sampler.h"
 #include "sim/world_layout.h"
@@ -90,13 +90,40 @@ const ArmControllerOptions& validated(const ArmControllerOptions& o) {
   return o;
 }
 
-std::shared_ptr<const sim::WorldModel> load_world(sim::Robot robot, sim::ObjectShape object,
-                                                  sim::WorldProfile world) {
+std::shared_ptr<const sim::WorldModel> require_panda(std::shared_ptr<const sim::WorldModel> world) {
+  if (!world) throw_invalid_argument("world", "a loaded world", "none");
   // The limits, base body and gains are the Panda's; Fetch has no real counterpart here.
-  if (robot != sim::Robot::kPanda) {
+  if (world->robot() != sim::Robot::kPanda) {
+    throw_invalid_argument("robot", "panda", std::string(sim::robot_name(world->robot())));
+  }
+  return world;
+}
+
+std::shared_ptr<const sim::WorldModel> load_panda_world(sim::Robot robot, sim::ObjectShape object,
+                                                        sim::WorldProfile world) {
+  if (robot != sim::Robot::kPanda) {  // before compiling a world nothing here can drive
     throw_invalid_argument("robot", "panda", std::string(sim::robot_name(robot)));
   }
   return sim::WorldModel::load(robot, object, world);
+}
+
+// The arm's and hand's own dynamics (simulated_arm.h), over the world's.
+void make_panda(mjModel* m, const sim::WorldIds& ids) {
+  for (int joint : ids.arm_joints) {
+    m->dof_damping[m->jnt_dofadr[joint]] = kPandaJointDamping;
+    m->dof_armature[m->jnt_dofadr[joint]] = kPandaJointArmature;
+  }
+  for (std::size_t f = 0; f < ids.finger_dof.size(); ++f) {
+    m->dof_armature[ids.finger_dof[f]] = kPandaJointArmature;
+    const int body = m->dof_bodyid[ids.finger_dof[f]];
+    const double scale = kPandaFingerMass_kg / m->body_mass[body];
+    m->body_mass[body] = kPandaFingerMass_kg;
+    for (int k = 0; k < 3; ++k) m->body_inertia[3 * body + k] *= scale;
+    const int actuator = ids.finger_actuator[f];
+    m->actuator_forcelimited[actuator] = 1;
+    m->actuator_forcerange[2 * actuator] = -kFrankaHandForce_n;
+    m->actuator_forcerange[2 * actuator + 1] = kFrankaHandForce_n;
+  }
 }
 
 int require_id(const mjModel* m, mjtObj type, const char* name) {
@@ -132,18 +159,28 @@ Pose SimulatedArm::Segment::at(double time_s) const {
 
 SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
                            const ArmControllerOptions& options)
-    : options_(validated(options)), world_(load_world(robot, object, world)) {
+    : SimulatedArm(load_panda_world(robot, object, world), options) {}
+
+SimulatedArm::SimulatedArm(std::shared_ptr<const sim::WorldModel> world,
+                           const ArmControllerOptions& options)
+    : options_(validated(options)), world_(require_panda(std::move(world))) {
   // A private copy of the training model: the weld that drags the gripper to its mocap
   // target is switched off (the joints are torque-driven instead), the fingers are coupled
   // as a Franka Hand's are (with independent fingers, two saturated finger servos squeezing
   // an off-centre object push the compliant arm sideways instead of centring the object),
-  // and the step is the controller's 1 ms.
+  // the arm and hand have the Panda's dynamics (make_panda), and the step is the
+  // controller's 1 ms.
   model_.reset(mj_copyModel(nullptr, world_->mj()));
   if (!model_) throw_internal("mj_copyModel failed: out of memory");
   mjModel* m = model_.get();
   m->eq_active[require_id(m, mjOBJ_EQUALITY, "gripper_follows_target")] = 0;
   m->eq_active[require_id(m, mjOBJ_EQUALITY, "fingers_coupled")] = 1;
   m->opt.timestep = kControlPeriod_s;
+  make_panda(m, world_->ids());
+  {  // the constants derived from masses (subtree masses, invweights) follow them
+    const sim::DataPtr constants = sim::make_data(m);
+    mj_setConst(m, constants.get());
+  }
   // The reachability check's second opinion: the same arm without joint limits.
   unlimited_model_.reset(mj_copyModel(nullptr, m));
   if (!unlimited_model_) throw_internal("mj_copyModel failed: out of memory");
@@ -180,15 +217,19 @@ SimulatedArm::SimulatedArm(sim::Robot robot, sim::ObjectShape object, sim::World
 }
 
 Episode SimulatedArm::reset(std::uint64_t seed) {
+  Rng rng(seed);
+  return reset(rng);
+}
+
+Episode SimulatedArm::reset(Rng& rng) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   const sim::WorldIds& ids = world_->ids();
-  // As PickPlaceEnv::start_episode: home state, then the object and goal that the seed's
-  // stream samples first (PickPlaceEnv::reset reseeds its generator with the seed).
+  // As PickPlaceEnv::start_episode: home state, then the object and goal that the
+  // stream samples next (PickPlaceEnv::reset reseeds its generator with the seed).
   mj_resetData(m, d);
   std::copy(world_->home_qpos().begin(), world_->home_qpos().end(), d->qpos);
   std::copy(world_->home_qvel().begin(), world_->home_qvel().end(), d->qvel);
-  Rng rng(seed);
   const sim::EpisodeLayout layout =
       sim::sample_episode_layout(rng, world_->object_spec().half_height_m, world_->parameters());
   mjtNum* object_qpos = d->qpos + ids.object_qpos;
@@ -209,6 +250,7 @@ Episode SimulatedArm::reset(std::uint64_t seed) {
   torques_.fill(0);
   torques_demanded_.fill(0);
   mode_ = ArmMode::kIdle;
+  fault_ = sim::PhysicsFault::kNone;
   return episode_;
 }
 
@@ -330,7 +372,8 @@ void SimulatedArm::advance(double seconds) {
   const auto ticks = static_cast<long long>(std::floor(seconds / kControlPeriod_s + 1e-6));
   for (long long i = 0; i < ticks; ++i) {
     tick();
-    if (physics_faulted()) {
+    fault_ = sim::detect_physics_fault(model_.get(), data_.get(), world_->ids());
+    if (fault_ != sim::PhysicsFault::kNone) {
       mode_ = ArmMode::kFault;
       break;
     }
@@ -537,18 +580,6 @@ void SimulatedArm::refresh_derived() {
   // mj_step leaves positions integrated but kinematics from before the last step.
   mj_kinematics(model_.get(), data_.get());
   mj_comPos(model_.get(), data_.get());
-}
-
-bool SimulatedArm::physics_faulted() const {
-  const mjModel* m = model_.get();
-  const mjData* d = data_.get();
-  if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
-      d->warning[mjWARN_BADQACC].number > 0) {
-    return true;
-  }
-  const auto finite = [](mjtNum v) { return std::isfinite(v); };
-  return !std::all_of(d->qpos, d->qpos + m->nq, finite) ||
-         !std::all_of(d->qvel, d->qvel + m->nv, finite);
 }
 
 void SimulatedArm::stop() {

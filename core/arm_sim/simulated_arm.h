@@ -26,8 +26,10 @@
 #include <string_view>
 #include <vector>
 
+#include "common/rng.h"
 #include "geometry/pose.h"
 #include "geometry/rigid_transform.h"
+#include "sim/environment.h"
 #include "sim/mujoco_data.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
@@ -39,6 +41,17 @@ namespace pnp::arm_sim {
 inline constexpr int kJoints = sim::kArmJoints;
 inline constexpr double kControlPeriod_s = 0.001;  // the controller's 1 kHz tick
 using JointVector = std::array<double, kJoints>;
+
+// The arm and hand are the Panda's, whatever a world profile gives a mocap-driven arm
+// (gym's Fetch: joint damping 50 and armature 1, 4 kg fingers with armature 100 and no
+// force limit). Joints and fingers: MuJoCo Menagerie's Panda (franka_emika_panda/
+// panda.xml, class "panda", its masses from Franka's published model); the grasp force:
+// the Franka Hand's continuous force (Franka's datasheet). The finger servo's gain and
+// damping stay the world's.
+inline constexpr double kPandaJointDamping = 1.0;   // N m s/rad
+inline constexpr double kPandaJointArmature = 0.1;  // kg m^2 (also each finger's, kg)
+inline constexpr double kPandaFingerMass_kg = 0.015;
+inline constexpr double kFrankaHandForce_n = 70;
 
 // The Panda's joint acceleration limits from Franka's datasheet, joints 1-7.
 inline constexpr JointVector kPandaDatasheetAccelerations_rad_per_s2{15, 7.5, 10, 12.5, 15, 20, 20};
@@ -104,7 +117,7 @@ enum class ArmMode {
   kTracking,  // interpolating towards the latest target
   kHolding,   // the latest target's segment has ended: holding it
   kStopped,   // stop(): decelerating within the limits, then holding; targets refused
-  kFault,     // the physics became unstable: only reset() recovers
+  kFault,     // the physics failed (fault() says how): only reset() recovers
 };
 
 enum class TargetCode { kAccepted, kInvalid, kUnreachable, kJointLimit, kStopped };
@@ -152,12 +165,18 @@ class SimulatedArm {
   SimulatedArm(sim::Robot robot, sim::ObjectShape object,
                sim::WorldProfile world = sim::WorldProfile::kPaper,
                const ArmControllerOptions& options = {});
+  // The same over a world already loaded (shared, read-only), which must be the Panda's.
+  explicit SimulatedArm(std::shared_ptr<const sim::WorldModel> world,
+                        const ArmControllerOptions& options = {});
   SimulatedArm(const SimulatedArm&) = delete;
   SimulatedArm& operator=(const SimulatedArm&) = delete;
 
   // The initial state of PickPlaceEnv::reset(seed): home posture, the object and goal
   // that seed samples, fingers open. The commanded pose is the measured TCP pose.
   Episode reset(std::uint64_t seed);
+  // The same from a random stream the caller keeps: the next episode layout `rng` draws
+  // (PickPlaceEnv's fresh episode after a fault draws the same way).
+  Episode reset(Rng& rng);
 
   // A TCP pose target in the base frame and a finger opening (0 to 0.08 m); max speed 0
   // means the default. Refusals change nothing.
@@ -176,6 +195,9 @@ class SimulatedArm {
   void resume();  // leave the E-stop holding the measured TCP pose
 
   ArmState state() const;
+  // Why the arm is in ArmMode::kFault (sim::detect_physics_fault after the tick that
+  // failed); kNone otherwise.
+  sim::PhysicsFault fault() const { return fault_; }
   bool task_success() const;  // sim::is_task_success on the object and the episode goal
 
   // Maps world coordinates to the base frame (body panda_link0), read from the model.
@@ -184,6 +206,7 @@ class SimulatedArm {
   const Episode& episode() const { return episode_; }
   double max_gripper_width_m() const { return 2 * world_->finger_range_m(); }
   const sim::WorldModel& world() const { return *world_; }
+  const ArmControllerOptions& options() const { return options_; }
 
  private:
   struct ModelDeleter {
@@ -210,7 +233,6 @@ class SimulatedArm {
   void ik_iterations(const Pose& setpoint_world);
   void apply_joint_torques();
   void refresh_derived();
-  bool physics_faulted() const;
   Pose measured_tcp_world() const;
   Pose forward_kinematics(const JointVector& q);  // TCP pose, on the scratch data
   JointVector measured_joints() const;
@@ -234,6 +256,7 @@ class SimulatedArm {
 
   Episode episode_;
   ArmMode mode_ = ArmMode::kIdle;
+  sim::PhysicsFault fault_ = sim::PhysicsFault::kNone;
   Segment segment_;
   Pose target_world_;
   Pose commanded_world_;  // forward kinematics of command_q_, refreshed after each advance

@@ -24,6 +24,7 @@ std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, Chor
                             {"robot", meta.robot},
                             {"object", meta.object},
                             {"world", meta.world},
+                            {"actuation", meta.actuation},
                             {"trunk", meta.network.trunk},
                             {"lstm", meta.network.lstm},
                             {"predicate_inputs", meta.network.predicate_inputs},
@@ -50,6 +51,7 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     out.robot = m.at("robot");
     out.object = m.at("object");
     out.world = m.value("world", "paper");
+    out.actuation = m.value("actuation", "mocap");
     out.network.trunk = m.at("trunk").get<std::vector<int>>();
     out.network.lstm = m.at("lstm");
     // Checkpoints written before these became options had both.

@@ -25,6 +25,7 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
       {"robot", meta.robot},
       {"object", meta.object},
       {"world", meta.world},
+      {"actuation", meta.actuation},
       {"hidden", meta.hidden},
       {"hidden_activation", std::string(nn::activation_name(meta.hidden_activation))},
       {"learn_gripper", meta.learn_gripper},
@@ -56,6 +57,7 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.robot = m.at("robot");
     out.object = m.at("object");
     out.world = m.value("world", "paper");
+    out.actuation = m.value("actuation", "mocap");
     out.hidden = m.at("hidden").get<std::vector<int>>();
     // Checkpoints written before the field existed are ReLU networks.
     const auto activation = m.find("hidden_activation");

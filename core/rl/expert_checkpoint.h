@@ -28,7 +28,8 @@ struct ExpertMeta {
   double eval_success = 0;
   std::uint64_t seed = 0;
   std::string code_commit;
-  std::string gemm_path{};  // nn/gemm_path.h: which products computed it ("" before kept)
+  std::string gemm_path{};          // nn/gemm_path.h: which products computed it ("" before kept)
+  std::string actuation = "mocap";  // sim/actuation.h (checkpoints before it: mocap)
 };
 
 struct LoadedExpert {

@@ -74,4 +74,14 @@ PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameter
   return planned;
 }
 
+std::optional<PoseTarget> hold_target(const GatewayConfig& config,
+                                      const std::optional<PoseTarget>& last_accepted,
+                                      const geometry::Pose& commanded_base) {
+  if (!last_accepted ||
+      !check_target(config.limits, *last_accepted, commanded_base, config.policy_period_s).ok()) {
+    return std::nullopt;
+  }
+  return last_accepted;
+}
+
 }  // namespace pnp::robot

@@ -16,6 +16,8 @@
 // limited (libfranka-style) and checked against the safety limits; a refused target must
 // not be sent.
 
+#include <optional>
+
 #include "geometry/pose.h"
 #include "robot/gateway_config.h"
 #include "robot/safety_limits.h"
@@ -45,5 +47,12 @@ struct ArmReading {
 // report, not the policy's output: a policy NaN becomes a refusal).
 PlannedTarget plan_target(const GatewayConfig& config, const sim::WorldParameters& world,
                           const ArmReading& arm, const sim::Action& action);
+
+// What holding sends after a refused plan (or while waiting for the arm): the last
+// accepted target again if it still passes the checks from where the arm is commanded
+// now; otherwise nothing, and the controller holds by itself.
+std::optional<PoseTarget> hold_target(const GatewayConfig& config,
+                                      const std::optional<PoseTarget>& last_accepted,
+                                      const geometry::Pose& commanded_base);
 
 }  // namespace pnp::robot

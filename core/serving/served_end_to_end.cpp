@@ -68,7 +68,8 @@ ServedEndToEnd::ServedEndToEnd(rl::LoadedExpert policy, std::int64_t checkpoint_
       checkpoint_id_(checkpoint_id),
       robot_(sim::parse_robot(policy_.meta.robot, "e2e checkpoint robot")),
       object_(sim::parse_object(policy_.meta.object, "e2e checkpoint object")),
-      world_(sim::parse_world_profile(policy_.meta.world, "e2e checkpoint world")) {
+      world_(sim::parse_world_profile(policy_.meta.world, "e2e checkpoint world")),
+      actuation_(sim::parse_actuation(policy_.meta.actuation, "e2e checkpoint actuation")) {
   if (policy_.meta.role != "e2e") {
     throw_invalid_argument("e2e checkpoint " + std::to_string(checkpoint_id), "role e2e",
                            "role " + policy_.meta.role);

@@ -40,6 +40,7 @@ class ServedEndToEnd final : public ServedPolicy {
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
   sim::WorldProfile world() const override { return world_; }
+  sim::Actuation actuation() const override { return actuation_; }
   // One entry: the e2e actor.
   std::vector<BatchStats> batch_stats() const override { return {batcher_->stats()}; }
 
@@ -52,6 +53,7 @@ class ServedEndToEnd final : public ServedPolicy {
   sim::Robot robot_;
   sim::ObjectShape object_;
   sim::WorldProfile world_;
+  sim::Actuation actuation_;
   std::shared_ptr<ActorBatcher> batcher_;
 };
 

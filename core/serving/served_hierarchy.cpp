@@ -92,8 +92,9 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
       // The shape the hierarchy handles is the retract expert's: only retract (with its
       // gripper closure) is fine-tuned for a new shape, the rest may come from another.
       object_(sim::parse_object(experts_[2].meta.object, "retract checkpoint object")),
-      world_(
-          sim::parse_world_profile(choreographer_.meta.world, "choreographer checkpoint world")) {
+      world_(sim::parse_world_profile(choreographer_.meta.world, "choreographer checkpoint world")),
+      actuation_(sim::parse_actuation(choreographer_.meta.actuation,
+                                      "choreographer checkpoint actuation")) {
   for (std::size_t k = 0; k < experts_.size(); ++k) {
     const auto& meta = experts_[k].meta;
     if (meta.role != kExpertRoles[k]) {
@@ -104,6 +105,12 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
       throw_invalid_argument(std::string(kExpertRoles[k]) + " checkpoint",
                              "the choreographer's robot (" + choreographer_.meta.robot + ")",
                              meta.robot);
+    }
+    // One component trained on the mocap hand makes the whole a mocap-trained policy.
+    if (sim::parse_actuation(meta.actuation,
+                             std::string(kExpertRoles[k]) + " checkpoint actuation") ==
+        sim::Actuation::kMocap) {
+      actuation_ = sim::Actuation::kMocap;
     }
   }
   for (std::size_t k = 0; k < experts_.size(); ++k) {

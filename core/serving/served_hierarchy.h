@@ -50,6 +50,7 @@ class ServedHierarchy final : public ServedPolicy {
   sim::Robot robot() const override { return robot_; }
   sim::ObjectShape object() const override { return object_; }
   sim::WorldProfile world() const override { return world_; }
+  sim::Actuation actuation() const override { return actuation_; }
   // Per expert (approach, manipulate, retract).
   std::vector<BatchStats> batch_stats() const override;
 
@@ -64,6 +65,7 @@ class ServedHierarchy final : public ServedPolicy {
   sim::Robot robot_;
   sim::ObjectShape object_;
   sim::WorldProfile world_;
+  sim::Actuation actuation_;
 };
 
 }  // namespace pnp::serving

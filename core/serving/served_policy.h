@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "serving/actor_batcher.h"
+#include "sim/actuation.h"
 #include "sim/object_shape.h"
 #include "sim/observation.h"
 #include "sim/robot.h"
@@ -94,6 +95,9 @@ class ServedPolicy : public std::enable_shared_from_this<ServedPolicy> {
   virtual sim::Robot robot() const = 0;
   virtual sim::ObjectShape object() const = 0;
   virtual sim::WorldProfile world() const = 0;
+  // How the served policy's hand followed its actions in training: kArm only when every
+  // served checkpoint was trained through the arm controller.
+  virtual sim::Actuation actuation() const = 0;
   // Per batched actor (batched_actors(kind()) order): requests and batches served so far.
   virtual std::vector<BatchStats> batch_stats() const = 0;
 

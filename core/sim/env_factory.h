@@ -5,6 +5,7 @@
 
 #include <memory>
 
+#include "sim/actuation.h"
 #include "sim/environment.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
@@ -19,6 +20,7 @@ class EnvFactory {
   virtual Robot robot() const = 0;
   virtual ObjectShape object() const = 0;
   virtual WorldProfile profile() const = 0;
+  virtual Actuation actuation() const = 0;
   // The extent the fingers close on, metres (what task states carry).
   double object_width_m() const { return 2 * object_spec(object()).half_width_m; }
 
@@ -28,7 +30,8 @@ class EnvFactory {
   EnvFactory& operator=(const EnvFactory&) = default;
 };
 
-// Environments in this process, sharing one loaded world.
+// Environments in this process, sharing one loaded world, their hands on gym's mocap
+// (arm_sim/arm_env_factory.h makes arm-actuated ones).
 class LocalEnvFactory final : public EnvFactory {
  public:
   explicit LocalEnvFactory(std::shared_ptr<const WorldModel> world);
@@ -36,6 +39,7 @@ class LocalEnvFactory final : public EnvFactory {
   Robot robot() const override { return world_->robot(); }
   ObjectShape object() const override { return world_->object(); }
   WorldProfile profile() const override { return world_->profile(); }
+  Actuation actuation() const override { return Actuation::kMocap; }
   const std::shared_ptr<const WorldModel>& world() const { return world_; }
 
  private:

@@ -1,10 +1,9 @@
 #include "sim/pick_place_env.h"
 
 #include <algorithm>
-#include <cmath>
 
-#include "common/error.h"
-#include "common/validate.h"
+#include "sim/physics_fault.h"
+#include "sim/step_rules.h"
 #include "sim/task_sampler.h"
 #include "sim/world_layout.h"
 
@@ -18,10 +17,6 @@ Eigen::Vector3d vec3(const mjtNum* p) {
 // MuJoCo's 3x3 matrices are row-major.
 Eigen::Vector3d euler_from_matrix(const mjtNum* mat) {
   return roll_pitch_yaw(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(mat));
-}
-
-bool all_finite(const mjtNum* values, int n) {
-  return std::all_of(values, values + n, [](mjtNum v) { return std::isfinite(v); });
 }
 
 }  // namespace
@@ -68,7 +63,7 @@ void PickPlaceEnv::start_episode() {
   for (int actuator : ids.finger_actuator) d->ctrl[actuator] = fingers;
 
   mj_forward(m, d);
-  gravity_compensation_.apply(m, d);
+  if (world.gravity_compensation) gravity_compensation_.apply(m, d);
   update_observation();
   elapsed_steps_ = 0;
   needs_reset_ = false;
@@ -91,40 +86,13 @@ void PickPlaceEnv::apply_action(const Action& action) {
         break;
     }
   }
-  const double range = world_->finger_range_m();
-  const double finger_scale = world.finger_action_in_metres ? 1.0 : range;
+  const double finger_scale = world.finger_action_in_metres ? 1.0 : world_->finger_range_m();
   for (std::size_t f = 0; f < 2; ++f) {
     const double q = d->qpos[ids.finger_qpos[f]];
-    d->ctrl[ids.finger_actuator[f]] = std::clamp(q + action(3) * finger_scale, 0.0, range);
+    d->ctrl[ids.finger_actuator[f]] =
+        std::clamp(q + action(3) * finger_scale, 0.0, world_->finger_ctrl_max_m());
   }
-  gravity_compensation_.apply(world_->mj(), d);
-}
-
-PhysicsFault PickPlaceEnv::detect_fault() const {
-  const mjModel* m = world_->mj();
-  const mjData* d = data_.get();
-  if (d->warning[mjWARN_BADQPOS].number > 0 || d->warning[mjWARN_BADQVEL].number > 0 ||
-      d->warning[mjWARN_BADQACC].number > 0) {
-    return PhysicsFault::kUnstable;
-  }
-  if (!all_finite(d->qpos, m->nq) || !all_finite(d->qvel, m->nv)) return PhysicsFault::kNonFinite;
-  if (d->warning[mjWARN_CONTACTFULL].number > 0 || d->warning[mjWARN_CNSTRFULL].number > 0) {
-    return PhysicsFault::kCapacity;
-  }
-  const WorldIds& ids = world_->ids();
-  const mjtNum* v = d->qvel + ids.object_dof;  // free joint: linear then angular
-  const mjtNum* p = d->qpos + ids.object_qpos;
-  const double speed_sq = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-  const double spin_sq = v[3] * v[3] + v[4] * v[4] + v[5] * v[5];
-  const double dx = p[0] - layout::kTableCenter_x, dy = p[1] - layout::kTableCenter_y,
-               dz = p[2] - layout::kTableTop_z;
-  constexpr double kMaxDistance = layout::kMaxObjectDistanceFromTable_m;
-  if (speed_sq > layout::kMaxObjectSpeed_mps * layout::kMaxObjectSpeed_mps ||
-      spin_sq > layout::kMaxObjectSpin_radps * layout::kMaxObjectSpin_radps ||
-      dx * dx + dy * dy + dz * dz > kMaxDistance * kMaxDistance) {
-    return PhysicsFault::kEjected;
-  }
-  return PhysicsFault::kNone;
+  if (world.gravity_compensation) gravity_compensation_.apply(world_->mj(), d);
 }
 
 void PickPlaceEnv::update_observation() {
@@ -162,15 +130,9 @@ void PickPlaceEnv::update_observation() {
 
 StepResult PickPlaceEnv::step(std::span<const double> action, std::span<const double> goal,
                               Objective objective) {
-  require_finite_vector(action, kActionSize, "action");
-  require_finite_vector(goal, kGoalSize, "goal");
-  if (needs_reset_) {
-    throw_failed_precondition(elapsed_steps_ == 0
-                                  ? "step: no episode has started; call reset() first"
-                                  : "step: the episode ended after 50 steps; call reset()");
-  }
-  const Action clipped = Eigen::Map<const Action>(action.data()).cwiseMax(-1.0).cwiseMin(1.0);
-  const Eigen::Vector3d agent_goal = Eigen::Map<const Eigen::Vector3d>(goal.data());
+  require_steppable(action, goal, needs_reset_, elapsed_steps_);
+  const Action clipped = clipped_action(action);
+  const Goal agent_goal = Eigen::Map<const Goal>(goal.data());
 
   const mjModel* m = world_->mj();
   mjData* d = data_.get();
@@ -178,7 +140,7 @@ StepResult PickPlaceEnv::step(std::span<const double> action, std::span<const do
   StepResult result;
   for (int k = 0; k < layout::kSubstepsPerStep; ++k) {
     mj_step(m, d);
-    result.fault = detect_fault();
+    result.fault = detect_physics_fault(m, d, world_->ids());
     if (result.fault != PhysicsFault::kNone) break;
   }
   if (result.fault != PhysicsFault::kNone) {
@@ -188,13 +150,8 @@ StepResult PickPlaceEnv::step(std::span<const double> action, std::span<const do
     ++elapsed_steps_;
     needs_reset_ = elapsed_steps_ >= layout::kEpisodeSteps;
   }
-  const TaskState state = task_state();
   result.observation = observation_;
-  result.achieved_goal = achieved_goal(objective, state);
-  result.reward = compute_reward(result.achieved_goal, agent_goal);
-  result.task_success = is_task_success(state.object, episode_goal_);
-  result.objective_done = objective_done_for_goal(objective, state, agent_goal);
-  result.episode_over = needs_reset_ || result.fault != PhysicsFault::kNone;
+  score_step(result, task_state(), objective, agent_goal, episode_goal_, needs_reset_);
   return result;
 }
 

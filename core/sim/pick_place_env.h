@@ -60,7 +60,6 @@ class PickPlaceEnv final : public Environment {
  private:
   void start_episode();
   void apply_action(const Action& action);
-  PhysicsFault detect_fault() const;
   void update_observation();
 
   std::shared_ptr<const WorldModel> world_;

@@ -19,42 +19,58 @@ std::string_view robot_fragment(Robot robot) {
   throw_internal("robot_fragment: unknown Robot value");
 }
 
+std::string contact(const ContactParameters& c) {
+  return fmt::format(R"(solref="{} {}" solimp="{} {} {}" margin="{}")", c.time_constant_s,
+                     c.damping_ratio, c.impedance_min, c.impedance_max, c.impedance_width_m,
+                     c.margin_m);
+}
+
+// The finger servo's force bound: none when the profile sets none (gym's).
+std::string finger_force_range(const WorldParameters& p) {
+  if (p.finger_force_limit_n <= 0) return "";
+  return fmt::format(R"(forcerange="-{0} {0}")", p.finger_force_limit_n);
+}
+
 // Options and classes. Collision bits: the floor, the table and the object (contype 1,
 // conaffinity 3) touch everything; the palm and the pads (1, 1) touch them; arm links
 // (class "link") are visual in the paper world and (2, 0) in gym, so they touch the
-// scenery but never each other or the gripper.
+// scenery but never each other or the gripper. Scenery geoms take the default contact,
+// the robot's (link, collide, pad) the profile's robot contact.
 std::string head(Robot robot, ObjectShape object, WorldProfile profile) {
   const WorldParameters& p = world_parameters(profile);
+  const std::string robot_contact = contact(p.robot_contact);
   return fmt::format(R"(<mujoco model="pnp_{}_{}_{}">
   <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
-  <option timestep="{}" iterations="30" tolerance="1e-8" cone="pyramidal"/>
+  <option timestep="{}" iterations="{}" tolerance="1e-8" cone="pyramidal"/>
   <size njmax="400" nconmax="80"/>
   <default>
-    <geom contype="0" conaffinity="0" friction="1 0.005 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"/>
+    <geom contype="0" conaffinity="0" friction="1 0.005 0.0001" {}/>
     <joint damping="0" armature="0"/>
     <default class="visual"><geom contype="0" conaffinity="0" group="1" rgba="0.7 0.7 0.75 1"/></default>
-    <default class="link"><geom contype="{}" conaffinity="0" condim="3" group="1" rgba="0.7 0.7 0.75 1"/></default>
-    <default class="collide"><geom contype="1" conaffinity="1" condim="3"/></default>
+    <default class="link"><geom contype="{}" conaffinity="0" condim="3" group="1" rgba="0.7 0.7 0.75 1" {}/></default>
+    <default class="collide"><geom contype="1" conaffinity="1" condim="3" {}/></default>
     <default class="scenery"><geom contype="1" conaffinity="3" condim="3"/></default>
-    <default class="pad"><geom type="box" contype="1" conaffinity="1" condim="{}" mass="0.08"
-                               friction="{} {} {}" rgba="0.2 0.2 0.2 1"/></default>
-    <default class="arm"><joint type="hinge" axis="0 0 1" damping="4" armature="0.05"/></default>
+    <default class="pad"><geom type="box" contype="1" conaffinity="1" condim="{}" mass="{}"
+                               friction="{} {} {}" rgba="0.2 0.2 0.2 1" {}/></default>
+    <default class="arm"><joint type="hinge" axis="0 0 1" damping="{}" armature="{}"/></default>
     <default class="finger">
       <joint type="slide" damping="{}" armature="{}"/>
-      <position kp="{}" forcerange="-{} {}"/>
+      <position kp="{}" {}/>
     </default>
   </default>
 )",
                      robot_name(robot), object_name(object), world_profile_name(profile),
-                     layout::kPhysicsTimestep_s, p.arm_links_collide ? 2 : 0, p.pad_condim,
-                     p.pad_friction[0], p.pad_friction[1], p.pad_friction[2], p.finger_damping,
-                     p.finger_armature, p.finger_kp, p.finger_force_limit_n,
-                     p.finger_force_limit_n);
+                     layout::kPhysicsTimestep_s, p.solver_iterations, contact(p.scenery_contact),
+                     p.arm_links_collide ? 2 : 0, robot_contact, robot_contact, p.pad_condim,
+                     p.finger_mass_kg, p.pad_friction[0], p.pad_friction[1], p.pad_friction[2],
+                     robot_contact, p.arm_damping, p.arm_armature, p.finger_damping,
+                     p.finger_armature, p.finger_kp, finger_force_range(p));
 }
 
 std::string object_geom(const ObjectSpec& spec) {
   if (spec.is_cylinder) {
-    return fmt::format(R"(type="cylinder" size="{} {}")", spec.half_width_m, spec.half_height_m);
+    return fmt::format(R"(type="cylinder" size="{} {}" solref="0.004 1" solimp="0.95 0.99 0.001")",
+                       spec.half_width_m, spec.half_height_m);
   }
   return fmt::format(R"(type="box" size="{0} {0} {1}")", spec.half_width_m, spec.half_height_m);
 }

@@ -87,6 +87,7 @@ ScriptedEvalReport evaluate_pipeline(const EnvFactory& envs,
   report.robot = envs.robot();
   report.object = envs.object();
   report.world = envs.profile();
+  report.actuation = envs.actuation();
   report.seed = seed;
   return report;
 }

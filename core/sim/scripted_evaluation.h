@@ -19,6 +19,7 @@ struct ScriptedEvalReport {
   Robot robot = Robot::kFetch;
   ObjectShape object = ObjectShape::kBlock;
   WorldProfile world = WorldProfile::kPaper;
+  Actuation actuation = Actuation::kMocap;
   std::uint64_t seed = 0;
   int episodes = 0;
   double success_rate = 0;

@@ -78,6 +78,7 @@ std::shared_ptr<const WorldModel> WorldModel::load(Robot robot, ObjectShape obje
   std::unique_ptr<mjModel, ModelDeleter> model(compile_mjcf(scene_xml(robot, object, profile)));
   auto world = std::make_shared<WorldModel>(Passkey{}, robot, object, profile, std::move(model));
   world->resolve_ids();
+  world->apply_finger_ctrl_range();
   world->compute_home_state();
   return world;
 }
@@ -120,6 +121,16 @@ void WorldModel::resolve_ids() {
   ids_.target_mocap = m->body_mocapid[require_id(m, mjOBJ_BODY, "target")];
 }
 
+// The fragments' finger servos take targets within the joint's range; a profile may widen
+// that (gym's 0.2 m), which the servo then drives against the joint's stop.
+void WorldModel::apply_finger_ctrl_range() {
+  const double ctrl_max = parameters().finger_ctrl_max_m;
+  for (int actuator : ids_.finger_actuator) {
+    if (ctrl_max > 0) model_->actuator_ctrlrange[2 * actuator + 1] = ctrl_max;
+  }
+  finger_ctrl_max_m_ = model_->actuator_ctrlrange[2 * ids_.finger_actuator[0] + 1];
+}
+
 void WorldModel::compute_home_state() {
   const mjModel* m = model_.get();
   DataPtr data = make_data(m);
@@ -153,7 +164,7 @@ void WorldModel::compute_home_state() {
   mju_zero(d->qvel, m->nv);
   GravityCompensation compensation(m, ids_.arm_root_body);
   for (int i = 0; i < 250; ++i) {
-    compensation.apply(m, d);
+    if (parameters().gravity_compensation) compensation.apply(m, d);
     mj_step(m, d);
   }
   home_qpos_.assign(d->qpos, d->qpos + m->nq);

@@ -49,6 +49,8 @@ class WorldModel {
 
   // Maximum travel of one finger (m); the opening between the pads is twice that.
   double finger_range_m() const { return finger_range_m_; }
+  // The largest target a finger servo takes (m): the finger's range, or the profile's.
+  double finger_ctrl_max_m() const { return finger_ctrl_max_m_; }
   // Orientation of the gripper's mocap target: local z (the approach axis) down.
   const Eigen::Vector4d& gripper_down_quat() const { return gripper_down_quat_; }
 
@@ -68,6 +70,7 @@ class WorldModel {
 
  private:
   void resolve_ids();
+  void apply_finger_ctrl_range();
   void compute_home_state();
 
   Robot robot_;
@@ -77,6 +80,7 @@ class WorldModel {
   std::unique_ptr<mjModel, ModelDeleter> model_;
   WorldIds ids_;
   double finger_range_m_ = 0;
+  double finger_ctrl_max_m_ = 0;
   Eigen::Vector4d gripper_down_quat_{0, 0, 1, 0};
   std::vector<mjtNum> home_qpos_;
   std::vector<mjtNum> home_qvel_;

@@ -10,6 +10,8 @@ namespace {
 // The authors' patched FetchPickAndPlace (repository lmarza/DRL-for-Pick-and-Place-Task-
 // subtasks, gymModified/): goal heights U(0, 0.15); the rest is this project's world as
 // it was before the gym profile (light block, grippy pads, visual-only arm links).
+constexpr ContactParameters kStiffContact{0.004, 1, 0.95, 0.99, 0.001, 0};
+
 constexpr WorldParameters kPaper{
     .gripper_start_above_table_m = layout::kPaperGripperStartHeight,
     .object_range_m = 0.15,
@@ -19,6 +21,14 @@ constexpr WorldParameters kPaper{
     .goal_max_height_m = 0.15,
     .object_mass_scale = 1,
     .object_condim = 4,
+    // Stiff contacts for light objects: a 4 ms time constant (2 x dt), impedance 0.95-0.99;
+    // the pads sink 1 mm into a 20 g cylinder held with 10 N, not 5 mm as with MuJoCo's.
+    .robot_contact = kStiffContact,
+    .scenery_contact = kStiffContact,
+    .solver_iterations = 30,
+    .arm_damping = 4,
+    .arm_armature = 0.05,
+    .gravity_compensation = true,
     .pad_friction = {1.5, 0.01, 0.0001},
     .pad_condim = 4,
     .arm_links_collide = false,
@@ -28,6 +38,8 @@ constexpr WorldParameters kPaper{
     .finger_force_limit_n = 40,
     .finger_damping = 20,
     .finger_armature = 0.01,
+    .finger_mass_kg = 0.08,
+    .finger_ctrl_max_m = 0,
     .fingers_open_at_reset = true,
 };
 
@@ -44,15 +56,29 @@ constexpr WorldParameters kGym{
     .goal_max_height_m = 0.45,
     .object_mass_scale = 20,  // the block: 2 kg
     .object_condim = 3,
+    // The robot's geoms as gym's class robot0:fetch (shared.xml); the table, floor and
+    // object keep MuJoCo's defaults, as in pick_and_place.xml; MuJoCo's default solver.
+    .robot_contact = {0.01, 1, 0.99, 0.99, 0.01, 0.001},
+    .scenery_contact = {},
+    .solver_iterations = 100,
+    // Class robot0:fetch's joints; no gravity compensation: the mocap weld holds the arm.
+    .arm_damping = 50,
+    .arm_armature = 1,
+    .gravity_compensation = false,
     .pad_friction = {1.0, 0.05, 0.01},
     .pad_condim = 4,
     .arm_links_collide = true,
     .mocap = MocapControl::kFromGripper,
     .finger_action_in_metres = true,
+    // Class robot0:fetchGripper and the finger links of robot.xml, the actuators of
+    // pick_and_place.xml: 4 kg fingers, armature 100, damping 1000, kp 30000 with no force
+    // limit, targets up to 0.2 m.
     .finger_kp = 30000,
     .finger_force_limit_n = 200,
     .finger_damping = 1000,
     .finger_armature = 1,
+    .finger_mass_kg = 4,
+    .finger_ctrl_max_m = 0.2,
     .fingers_open_at_reset = false,
 };
 

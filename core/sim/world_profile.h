@@ -37,6 +37,16 @@ enum class MocapControl {
   kFromGripper,        // target = the gripper's current TCP + 0.05 a (gym's mocap reset)
 };
 
+// A geom class's contact softness (MuJoCo's solref and solimp) and margin.
+struct ContactParameters {
+  double time_constant_s = 0.02;  // solref: MuJoCo's defaults
+  double damping_ratio = 1;
+  double impedance_min = 0.9;  // solimp
+  double impedance_max = 0.95;
+  double impedance_width_m = 0.001;
+  double margin_m = 0;
+};
+
 struct WorldParameters {
   // Scene sampling around the gripper's start xy.
   double gripper_start_above_table_m = 0;  // the TCP's start height over the table top
@@ -53,6 +63,15 @@ struct WorldParameters {
   int object_condim = 0;  // 3: sliding friction only; 4: plus torsional
 
   // Contact and control.
+  ContactParameters robot_contact;    // every robot geom: links, palm, pads
+  ContactParameters scenery_contact;  // floor, table and object
+  int solver_iterations = 0;          // MuJoCo's constraint solver, per step
+  // The arm's joints: damping (N m s/rad) and armature (kg m^2), every hinge alike.
+  double arm_damping = 0;
+  double arm_armature = 0;
+  // Joint torques -J_com^T M g cancel the arm's weight, as a real arm's controller does;
+  // without them only the mocap weld holds the arm up.
+  bool gravity_compensation = false;
   std::array<double, 3> pad_friction{};  // sliding, torsional, rolling
   int pad_condim = 0;
   bool arm_links_collide = false;  // with the table and the object (never with each other)
@@ -61,8 +80,9 @@ struct WorldParameters {
   // range. The paper world scales by the finger's range (proportional); gym adds the
   // raw action (1 m per unit: effectively open or close at any sizeable action).
   bool finger_action_in_metres = false;
-  // The finger position servo: gain (N/m) and force limit (N) per finger. Gym's Fetch
-  // squeezes with kp 30000; a 2 kg block slips out of a 40 N grasp when it is lifted.
+  // The finger position servo: gain (N/m) and force limit (N, 0: none) per finger. Gym's
+  // Fetch squeezes with kp 30000 and no limit; a 2 kg block slips out of a 40 N grasp when
+  // it is lifted.
   double finger_kp = 0;
   double finger_force_limit_n = 0;
   // The finger slide joints' damping (N s/m) and armature (kg). Gym's damping 1000 makes
@@ -72,6 +92,10 @@ struct WorldParameters {
   // and 100% with armature 1).
   double finger_damping = 0;
   double finger_armature = 0;
+  double finger_mass_kg = 0;  // each finger's moving body (its pad)
+  // The finger servo's largest target (m): 0 means the joint's own range. gym's 0.2 lets
+  // an opening finger be driven far past its 5 cm stop, so it opens fast and hard.
+  double finger_ctrl_max_m = 0;
   bool fingers_open_at_reset = true;
 
   Eigen::Vector3d gripper_start() const;  // the TCP's start, world frame

@@ -3,6 +3,7 @@
 #include <memory>
 #include <optional>
 
+#include "arm_sim/arm_env_factory.h"
 #include "common/error.h"
 #include "nn/gemm_path.h"
 #include "rl/choreographer_checkpoint.h"
@@ -10,7 +11,6 @@
 #include "rl/learned_expert.h"
 #include "rl/subtask_trainer.h"
 #include "sim/scripted_expert.h"
-#include "sim/world_model.h"
 
 namespace pnp::training {
 namespace {
@@ -35,9 +35,10 @@ rl::ExpertAlgorithm expert_algorithm(const TrainingSpec& spec) {
 
 std::unique_ptr<sim::EnvFactory> environments(const TrainingSpec& spec,
                                               const TrainingHooks& hooks) {
-  if (hooks.environments) return hooks.environments(spec.robot, spec.object, spec.world);
-  return std::make_unique<sim::LocalEnvFactory>(
-      sim::WorldModel::load(spec.robot, spec.object, spec.world));
+  if (hooks.environments) {
+    return hooks.environments(spec.robot, spec.object, spec.world, spec.actuation);
+  }
+  return arm_sim::make_env_factory(spec.robot, spec.object, spec.world, spec.actuation);
 }
 
 TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inputs,
@@ -84,7 +85,8 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
                           success,
                           spec.seed,
                           code_commit,
-                          std::string(nn::gemm_path_name(nn::active_gemm_path()))};
+                          std::string(nn::gemm_path_name(nn::active_gemm_path())),
+                          std::string(sim::actuation_name(spec.actuation))};
   };
   auto save = [&](const rl::DdpgHerAgent& agent, long long steps, double success) {
     return rl::save_expert(meta_at(steps, success), agent.actor(), &agent.critic(),
@@ -125,7 +127,8 @@ TrainingOutcome train_hlc(const TrainingSpec& spec, const TrainingInputs& inputs
                                  success,
                                  spec.seed,
                                  code_commit,
-                                 std::string(nn::gemm_path_name(nn::active_gemm_path()))};
+                                 std::string(nn::gemm_path_name(nn::active_gemm_path())),
+                                 std::string(sim::actuation_name(spec.actuation))};
   };
   if (hooks.on_evaluation) {
     config.on_evaluation = [&](const rl::CurvePoint& p, rl::ChoreographerNet& net) {

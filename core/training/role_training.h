@@ -30,7 +30,7 @@ struct TrainingInputs {
 // Makes the environment factory for a world: where rollouts and evaluations run (remote
 // simulation services, say). Results do not depend on it.
 using EnvironmentSource = std::function<std::unique_ptr<sim::EnvFactory>(
-    sim::Robot, sim::ObjectShape, sim::WorldProfile)>;
+    sim::Robot, sim::ObjectShape, sim::WorldProfile, sim::Actuation)>;
 
 struct TrainingHooks {
   std::size_t threads = 0;  // rollout and evaluation threads (0: all cores); no effect on results

@@ -40,6 +40,7 @@ void TrainingSpec::validate() const {
     throw_invalid_argument("role", "one of approach, manipulate, retract, hlc, e2e",
                            "\"" + role + "\"");
   }
+  sim::require_supported(robot, actuation);
   stop.validate();
   if (role == "hlc") {
     a3c.validate();
@@ -63,6 +64,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
           {"robot", sim::robot_name(s.robot)},
           {"object", sim::object_name(s.object)},
           {"world", sim::world_profile_name(s.world)},
+          {"actuation", sim::actuation_name(s.actuation)},
           {"seed", s.seed},
           {"preset", s.preset},
           {"stop",
@@ -179,6 +181,10 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
   std::string world(sim::world_profile_name(sim::WorldProfile::kPaper));
   read(j, "world", world, "");
   s.world = sim::parse_world_profile(world, "world");
+  // A spec without an actuation was stored before it existed: the hand was on the mocap.
+  std::string actuation(sim::actuation_name(sim::Actuation::kMocap));
+  read(j, "actuation", actuation, "");
+  s.actuation = sim::parse_actuation(actuation, "actuation");
   read(j, "seed", s.seed, "");
   read(j, "preset", s.preset, "");
   read(j, "scripted_gripper", s.scripted_gripper, "");

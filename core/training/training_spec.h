@@ -12,6 +12,7 @@
 #include "rl/a3c_trainer.h"
 #include "rl/ddpg_her_config.h"
 #include "rl/training_progress.h"
+#include "sim/actuation.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/world_profile.h"
@@ -28,6 +29,8 @@ struct TrainingSpec {
   sim::ObjectShape object = sim::ObjectShape::kBlock;
   // The world profile (sim/world_profile.h); runs stored before profiles existed: paper.
   sim::WorldProfile world = sim::kDefaultWorldProfile;
+  // How the hand follows actions (sim/actuation.h); runs stored before it existed: mocap.
+  sim::Actuation actuation = sim::Actuation::kMocap;
   std::uint64_t seed = 0;
   // The preset the spec started from, before any single value was overridden ("": a run
   // stored before presets existed).
@@ -39,7 +42,8 @@ struct TrainingSpec {
 
   bool is_expert() const;  // approach, manipulate or retract
   // Throws INVALID_ARGUMENT naming the field: unknown role or algorithm, an algorithm the
-  // role cannot use, and every hyperparameter out of range.
+  // role cannot use, an actuation the robot does not have, and every hyperparameter out
+  // of range.
   void validate() const;
 };
 

@@ -4,7 +4,7 @@ Gymnasium-style environment and a live inference session, and prints its success
 
 The episodes are the simulation service's episodes of --seed, the same ones
 `pnpctl evaluate --seed` plays, so both print the same success rate and choice sequences.
-Robot, object and world default to what the served choreographer was trained on.
+Robot, object, world and actuation default to what the served choreographer was trained on.
 
   PYTHONPATH=build/python python3 examples/python/evaluate_served.py --episodes 100
 """
@@ -23,14 +23,14 @@ LETTERS = {"approach": "A", "manipulate": "M", "retract": "R"}
 
 
 def served_world(platform: pnp.Platform) -> dict:
-    """robot, object and world of the served choreographer, where recorded."""
+    """robot, object, world and actuation of the served choreographer, where recorded."""
     status = platform.serving_status()
     if not status["ready"]:
         sys.exit("evaluate_served: the inference service serves no hierarchy yet "
                  "(promote one: pnpctl promote)")
     for role in status["roles"]:
         if role["role"] == "hlc":
-            return {k: role[k] for k in ("robot", "object", "world") if role[k]}
+            return {k: role[k] for k in ("robot", "object", "world", "actuation") if role[k]}
     return {}
 
 
@@ -56,6 +56,7 @@ def main() -> None:
     parser.add_argument("--robot", help="default: the served hierarchy's")
     parser.add_argument("--object", help="default: the served hierarchy's")
     parser.add_argument("--world", help="default: the served hierarchy's")
+    parser.add_argument("--actuation", help="mocap or arm; default: the served hierarchy's")
     parser.add_argument("--run-dir", default="runs/platform",
                         help="where scripts/run wrote endpoints.json (PNP_*_ADDRESS win)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -64,7 +65,8 @@ def main() -> None:
         parser.error(f"--episodes: expected a positive integer, got {args.episodes}")
 
     with pnp.Platform(pnp.Endpoints.discover(args.run_dir)) as platform:
-        world = {"robot": "fetch", "object": "block", "world": "gym", **served_world(platform)}
+        world = {"robot": "fetch", "object": "block", "world": "gym", "actuation": "default",
+                 **served_world(platform)}
         for key in world:
             if getattr(args, key):
                 world[key] = getattr(args, key)
@@ -77,7 +79,7 @@ def main() -> None:
                 env_steps += steps
                 sequences[choices] += 1
 
-    where = f"{world['world']}/{world['robot']}/{world['object']}"
+    where = f"{world['world']}/{world['robot']}/{world['object']} ({world['actuation']} hand)"
     ranked = sorted(sequences.items(), key=lambda kv: (-kv[1], kv[0]))
     if args.json:
         print(json.dumps({"episodes": args.episodes, "successes": successes,

@@ -55,6 +55,31 @@ sim::WorldProfile from_proto(common::v1::World world, std::string_view field) {
   }
 }
 
+sim::Actuation from_proto(common::v1::Actuation actuation, sim::Robot robot,
+                          std::string_view field) {
+  sim::Actuation out = sim::default_actuation(robot);
+  switch (actuation) {
+    case common::v1::ACTUATION_UNSPECIFIED:
+      break;
+    case common::v1::ACTUATION_MOCAP:
+      out = sim::Actuation::kMocap;
+      break;
+    case common::v1::ACTUATION_ARM:
+      out = sim::Actuation::kArm;
+      break;
+    default:
+      throw_invalid_argument(field, "ACTUATION_MOCAP or ACTUATION_ARM (unset: the robot's default)",
+                             std::to_string(actuation));
+  }
+  sim::require_supported(robot, out, field);
+  return out;
+}
+
+common::v1::Actuation to_proto(sim::Actuation actuation) {
+  return actuation == sim::Actuation::kArm ? common::v1::ACTUATION_ARM
+                                           : common::v1::ACTUATION_MOCAP;
+}
+
 common::v1::World to_proto(sim::WorldProfile world) {
   return world == sim::WorldProfile::kGym ? common::v1::WORLD_GYM : common::v1::WORLD_PAPER;
 }

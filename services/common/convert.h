@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "pnp/common/v1/common.pb.h"
+#include "sim/actuation.h"
 #include "sim/object_shape.h"
 #include "sim/observation.h"
 #include "sim/robot.h"
@@ -17,8 +18,13 @@ namespace pnp::services {
 
 sim::Robot from_proto(common::v1::Robot robot, std::string_view field);
 sim::ObjectShape from_proto(common::v1::ObjectShape object, std::string_view field);
-// WORLD_UNSPECIFIED is the paper world; unknown values are INVALID_ARGUMENT.
+// WORLD_UNSPECIFIED is the default world (gym); unknown values are INVALID_ARGUMENT.
 sim::WorldProfile from_proto(common::v1::World world, std::string_view field);
+// ACTUATION_UNSPECIFIED is the robot's default; unknown values, and an actuation the robot
+// does not have, are INVALID_ARGUMENT.
+sim::Actuation from_proto(common::v1::Actuation actuation, sim::Robot robot,
+                          std::string_view field);
+common::v1::Actuation to_proto(sim::Actuation actuation);
 common::v1::Robot to_proto(sim::Robot robot);
 common::v1::World to_proto(sim::WorldProfile world);
 common::v1::ObjectShape to_proto(sim::ObjectShape object);

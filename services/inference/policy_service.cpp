@@ -249,6 +249,7 @@ grpc::Status PolicyServiceImpl::GetServingStatus(grpc::ServerContext*,
         role.set_robot(to_proto(served->robot()));
         role.set_object(to_proto(served->object()));
         role.set_world(to_proto(served->world()));
+        role.set_actuation(to_proto(served->actuation()));
       }
     }
     return grpc::Status::OK;

@@ -1,5 +1,6 @@
 #include "services/sim/env_registry.h"
 
+#include "arm_sim/arm_env_factory.h"
 #include "common/error.h"
 #include "common/rng.h"
 
@@ -10,13 +11,14 @@ void EnvBatch::reset(std::size_t k) {
 }
 
 void EnvBatch::reset(std::size_t k, std::uint64_t episode_seed) {
-  envs[k].reset(episode_seed);
+  envs[k]->reset(episode_seed);
   ++episodes[k];
 }
 
 std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
-                                std::uint64_t seed, int count,
+                                sim::Actuation actuation, std::uint64_t seed, int count,
                                 std::chrono::steady_clock::duration idle_timeout) {
+  sim::require_supported(robot, actuation);
   if (count < 1 || count > kMaxBatch) {
     throw_invalid_argument("count", "1 to " + std::to_string(kMaxBatch), std::to_string(count));
   }
@@ -39,8 +41,10 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
   auto batch = std::make_shared<EnvBatch>();
   try {
     batch->world = worlds_.get(robot, object, world);
+    batch->actuation = actuation;
     batch->seed = seed;
-    for (int k = 0; k < count; ++k) batch->envs.emplace_back(batch->world);
+    const auto factory = arm_sim::make_env_factory(batch->world, actuation);
+    for (int k = 0; k < count; ++k) batch->envs.push_back(factory->make());
     batch->episodes.assign(static_cast<std::size_t>(count), 0);
   } catch (...) {
     std::lock_guard lock(mutex_);

@@ -12,7 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/pick_place_env.h"
+#include "sim/actuation.h"
+#include "sim/environment.h"
 #include "sim/world_cache.h"
 #include "sim/world_model.h"
 
@@ -21,7 +22,8 @@ namespace pnp::services {
 struct EnvBatch {
   std::shared_ptr<const sim::WorldModel> world;
   std::uint64_t seed = 0;
-  std::vector<sim::PickPlaceEnv> envs;
+  sim::Actuation actuation = sim::Actuation::kMocap;
+  std::vector<std::unique_ptr<sim::Environment>> envs;
   std::vector<std::uint64_t> episodes;  // episodes started, per environment
   std::chrono::steady_clock::duration idle_timeout{};
   // Set by each call that uses the batch (under `mutex`) and read by the expiry sweep
@@ -43,10 +45,10 @@ class EnvRegistry {
   static constexpr int kMaxEnvironments = 256;  // over all batches
   static constexpr std::chrono::seconds kMaxIdleTimeout{3600};
 
-  // Validated: count in [1, 64], idle timeout in (0, 3600 s]; RESOURCE_EXHAUSTED past
-  // 256 environments in all.
+  // Validated: count in [1, 64], idle timeout in (0, 3600 s], an actuation the robot has;
+  // RESOURCE_EXHAUSTED past 256 environments in all.
   std::string create(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
-                     std::uint64_t seed, int count,
+                     sim::Actuation actuation, std::uint64_t seed, int count,
                      std::chrono::steady_clock::duration idle_timeout);
   // NOT_FOUND for an unknown or expired id; marks the batch used.
   std::shared_ptr<EnvBatch> get(const std::string& id);

@@ -25,7 +25,7 @@ std::size_t checked_index(int index, const EnvBatch& batch, const std::string& f
   return static_cast<std::size_t>(index);
 }
 
-void fill_state(const sim::PickPlaceEnv& env, int index, sv1::EnvState& out) {
+void fill_state(const sim::Environment& env, int index, sv1::EnvState& out) {
   out.set_index(index);
   to_proto(env.observation(), *out.mutable_observation());
   to_proto(env.episode_goal(), *out.mutable_episode_goal());
@@ -75,7 +75,7 @@ void reset_batch(EnvBatch& batch, const sv1::ResetRequest& request, sv1::ResetRe
     } else {
       batch.reset(k, seeds[static_cast<int>(i)]);
     }
-    fill_state(batch.envs[k], static_cast<int>(k), *response.add_states());
+    fill_state(*batch.envs[k], static_cast<int>(k), *response.add_states());
   }
 }
 
@@ -96,7 +96,7 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
       throw_invalid_argument(field + ".index", "each environment at most once",
                              std::to_string(k) + " again");
     seen[k] = true;
-    if (batch.envs[k].needs_reset()) {
+    if (batch.envs[k]->needs_reset()) {
       throw Error(ErrorCode::kFailedPrecondition,
                   field + ": environment " + std::to_string(k) +
                       " has no episode running (its 50 steps are over or it was never reset): "
@@ -107,9 +107,9 @@ void step_batch(EnvBatch& batch, const sv1::StepRequest& request, sv1::StepRespo
                     from_proto(a.objective(), field + ".objective")});
   }
   for (const Planned& p : plan) {  // everything validated: now move
-    const sim::StepResult r = batch.envs[p.index].step(p.action, p.goal, p.objective);
+    const sim::StepResult r = batch.envs[p.index]->step(p.action, p.goal, p.objective);
     auto* out = response.add_results();
-    fill_state(batch.envs[p.index], static_cast<int>(p.index), *out->mutable_state());
+    fill_state(*batch.envs[p.index], static_cast<int>(p.index), *out->mutable_state());
     out->set_reward(r.reward);
     out->set_objective_done(r.objective_done);
     out->set_task_success(r.task_success);
@@ -134,11 +134,12 @@ grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEn
     const auto robot = from_proto(request->robot(), "robot");
     const auto object = from_proto(request->object(), "object");
     const auto world = from_proto(request->world(), "world");
+    const auto actuation = from_proto(request->actuation(), robot, "actuation");
     std::chrono::steady_clock::duration timeout = std::chrono::seconds(300);
     if (request->has_idle_timeout())
       timeout = from_proto(request->idle_timeout(), "idle_timeout", EnvRegistry::kMaxIdleTimeout);
-    response->set_env_id(
-        registry_.create(robot, object, world, request->seed(), request->count(), timeout));
+    response->set_env_id(registry_.create(robot, object, world, actuation, request->seed(),
+                                          request->count(), timeout));
     response->set_count(request->count());
     return grpc::Status::OK;
   });

@@ -148,9 +148,10 @@ int main(int argc, char** argv) {
     pnp::training::EnvironmentSource environments;
     if (!sim_addresses.empty()) {
       environments = [sim_addresses, sim_tls](pnp::sim::Robot robot, pnp::sim::ObjectShape object,
-                                              pnp::sim::WorldProfile world) {
+                                              pnp::sim::WorldProfile world,
+                                              pnp::sim::Actuation actuation) {
         return std::make_unique<pnp::sim_client::RemoteEnvFactory>(sim_addresses, robot, object,
-                                                                   world, sim_tls);
+                                                                   world, actuation, sim_tls);
       };
     }
     pnp::training::RunManagerOptions options{db, role, std::string(pnp::kCodeCommit), threads,

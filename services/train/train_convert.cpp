@@ -91,6 +91,7 @@ std::pair<training::TrainingSpec, training::CheckpointRefs> from_proto(
   spec.robot = from_proto(r.robot(), "robot");
   spec.object = from_proto(r.object(), "object");
   spec.world = from_proto(r.world(), "world");
+  spec.actuation = from_proto(r.actuation(), spec.robot, "actuation");
   spec.seed = r.seed();
   read_stop(r.stop(), spec.stop);
   read_ddpg(r.ddpg(), spec);

@@ -39,13 +39,14 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   out.set_parent_checkpoint_id(run.spec.parent_checkpoint_id.value_or(0));
   out.set_env_steps(run.env_steps);
   // A run created by a training service stores its spec; an imported one (a checkpoint
-  // file brought into the store) has none, and shows no cap, target or world.
+  // file brought into the store) has none, and shows no cap, target, world or actuation.
   const auto config = nlohmann::json::parse(run.spec.config_json, nullptr, false);
   if (config.is_object() && config.contains("spec")) {
     const training::TrainingSpec spec = training::spec_from_json(config["spec"]);
     out.set_max_steps(spec.stop.max_steps);
     out.set_target_success(spec.stop.target_success);
     out.set_world(to_proto(spec.world));
+    out.set_actuation(to_proto(spec.actuation));
   }
   out.set_last_success(run.last_success);
   if (run.last_score) out.set_last_score(*run.last_score);

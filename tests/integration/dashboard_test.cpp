@@ -133,7 +133,7 @@ TEST_F(Dashboard, EpisodesOfTheServedHierarchyAreDrawn) {
   EXPECT_NE(dom.find("data-episodes=\"2\""), std::string::npos) << dom;
   EXPECT_EQ(count(dom, "class=\"episode\" data-steps=\"50\""), 2) << dom;
   EXPECT_GT(count(dom, "class=\"gripper subtask-approach\""), 0);
-  EXPECT_NE(dom.find("(paper/panda/block, seed 880000)"), std::string::npos) << dom;
+  EXPECT_NE(dom.find("(paper/panda/block, mocap hand, seed 880000)"), std::string::npos) << dom;
 }
 
 TEST_F(Dashboard, BadRequestsAreRefusedNamingTheParameter) {

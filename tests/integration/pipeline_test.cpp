@@ -143,8 +143,9 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
   const CliResult other_robot = run_pnpctl(
       dir, "pnpctl-evaluate-panda", command(words("evaluate --episodes 2 --robot panda")), 120s);
   ASSERT_TRUE(other_robot.status && other_robot.status->ok()) << other_robot.err;
-  EXPECT_NE(other_robot.err.find("pnpctl: warning: evaluating on gym/panda/block, but the "
-                                 "served policy was trained elsewhere: approach (gym/fetch/block)"),
+  EXPECT_NE(other_robot.err.find("pnpctl: warning: evaluating on gym/panda/block (mocap hand), but "
+                                 "the served policy was trained elsewhere: approach "
+                                 "(gym/fetch/block, mocap hand)"),
             std::string::npos)
       << other_robot.err;
   const CliResult strict =
@@ -160,8 +161,9 @@ TEST(Pipeline, RunsEndToEndThroughTheServicesAndLeavesAConsistentStore) {
                  command(words("evaluate --episodes 2 --world paper --strict")), 120s);
   ASSERT_TRUE(other_world.status);
   EXPECT_EQ(other_world.status->describe(), "exit 1") << other_world.err;
-  EXPECT_NE(other_world.err.find("evaluating on paper/fetch/block, but the served policy was "
-                                 "trained elsewhere: approach (gym/fetch/block)"),
+  EXPECT_NE(other_world.err.find("evaluating on paper/fetch/block (mocap hand), but the served "
+                                 "policy was trained elsewhere: approach (gym/fetch/block, mocap "
+                                 "hand)"),
             std::string::npos)
       << other_world.err;
 

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "sim/pick_place_env.h"
 
 namespace pnp::services {
 namespace {
@@ -15,12 +16,15 @@ using std::chrono::seconds;
 
 TEST(EnvRegistry, BatchesOfOneWorldShareItsCompiledModel) {
   EnvRegistry registry;
-  const auto a = registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock,
-                                 sim::WorldProfile::kGym, 1, 2, seconds(60));
-  const auto b = registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock,
-                                 sim::WorldProfile::kGym, 2, 3, seconds(60));
-  const auto c = registry.create(sim::Robot::kPanda, sim::ObjectShape::kCylinder,
-                                 sim::WorldProfile::kGym, 3, 1, seconds(60));
+  const auto a =
+      registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                      sim::Actuation::kMocap, 1, 2, seconds(60));
+  const auto b =
+      registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                      sim::Actuation::kMocap, 2, 3, seconds(60));
+  const auto c =
+      registry.create(sim::Robot::kPanda, sim::ObjectShape::kCylinder, sim::WorldProfile::kGym,
+                      sim::Actuation::kMocap, 3, 1, seconds(60));
   EXPECT_EQ(registry.get(a)->world.get(), registry.get(b)->world.get());
   EXPECT_NE(registry.get(a)->world.get(), registry.get(c)->world.get());
   EXPECT_EQ(registry.get(c)->world->object(), sim::ObjectShape::kCylinder);
@@ -29,15 +33,16 @@ TEST(EnvRegistry, BatchesOfOneWorldShareItsCompiledModel) {
   registry.close(a);
   const auto batch = registry.get(b);
   batch->reset(0);
-  EXPECT_EQ(batch->envs[0].world().mj(), batch->world->mj());
+  EXPECT_EQ(static_cast<const sim::PickPlaceEnv&>(*batch->envs[0]).world().mj(),
+            batch->world->mj());
   EXPECT_EQ(registry.environments(), 4);
 }
 
 TEST(EnvRegistry, RefusesAnOversizedBatchNamingCount) {
   EnvRegistry registry;
   try {
-    registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym, 1,
-                    EnvRegistry::kMaxBatch + 1, seconds(60));
+    registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                    sim::Actuation::kMocap, 1, EnvRegistry::kMaxBatch + 1, seconds(60));
     FAIL() << "a batch of 65 was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
@@ -51,8 +56,9 @@ TEST(EnvRegistry, RefusesAnOversizedBatchNamingCount) {
 // timestamp unsynchronised).
 TEST(EnvRegistry, ExpiryRunsWhileABatchIsInUse) {
   EnvRegistry registry;
-  const auto id = registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock,
-                                  sim::WorldProfile::kGym, 1, 1, seconds(60));
+  const auto id =
+      registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                      sim::Actuation::kMocap, 1, 1, seconds(60));
   std::atomic<bool> done{false};
   std::jthread sweeper([&] {
     while (!done) registry.expire(std::chrono::steady_clock::now());

@@ -134,7 +134,8 @@ TEST(RemoteEnvironment, AnUnreachableServiceIsUnavailableNamingItsAddress) {
   }
   const std::string address = "127.0.0.1:" + std::to_string(port);
   const RemoteEnvFactory factory({address}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
-                                 sim::WorldProfile::kPaper, {}, milliseconds(300));
+                                 sim::WorldProfile::kPaper, sim::Actuation::kMocap, {},
+                                 milliseconds(300));
   std::string message;
   EXPECT_EQ(code_of([&] { factory.make(); }, &message), ErrorCode::kUnavailable);
   EXPECT_NE(message.find(address), std::string::npos) << message;
@@ -207,7 +208,8 @@ TEST(RemoteEnvFactory, APoolTargetSpreadsEnvironmentsAndSkipsAServerThatIsGone) 
                            ",127.0.0.1:" + port_of(b.address()) +
                            ",127.0.0.1:" + std::to_string(gone_port);
   const RemoteEnvFactory factory({pool}, sim::Robot::kFetch, sim::ObjectShape::kBlock,
-                                 sim::WorldProfile::kPaper, {}, milliseconds(300));
+                                 sim::WorldProfile::kPaper, sim::Actuation::kMocap, {},
+                                 milliseconds(300));
   std::vector<std::unique_ptr<sim::Environment>> envs;
   for (int i = 0; i < 6; ++i) {
     envs.push_back(factory.make());
@@ -238,8 +240,9 @@ TEST(RemoteTraining, TwoServicesTrainExactlyAsInProcess) {
   };
   const auto local = run({});
   const std::vector<std::string> addresses{a.address(), b.address()};
-  const auto remote = run([&](sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world) {
-    return std::make_unique<RemoteEnvFactory>(addresses, robot, object, world);
+  const auto remote = run([&](sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
+                              sim::Actuation actuation) {
+    return std::make_unique<RemoteEnvFactory>(addresses, robot, object, world, actuation);
   });
   ASSERT_EQ(local.result.curve.size(), remote.result.curve.size());
   ASSERT_FALSE(local.result.curve.empty());

@@ -7,7 +7,9 @@
 #include <limits>
 
 #include "common/error.h"
+#include "common/rng.h"
 #include "services/common/server_runtime.h"
+#include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
 
 namespace pnp::services {

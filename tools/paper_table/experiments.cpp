@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "arm_sim/arm_env_factory.h"
 #include "common/rng.h"
 #include "common/thread_pool.h"
 #include "rl/a3c_trainer.h"
@@ -27,7 +28,9 @@ void add(MethodRun& run, std::string role, rl::TrainingResult result) {
 
 MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm,
                         std::uint64_t seed, const ExperimentSettings& s, const Progress& progress) {
-  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object, s.world));
+  const auto envs =
+      arm_sim::make_env_factory(s.robot, s.object, s.world, sim::default_actuation(s.robot));
+  const sim::EnvFactory& world = *envs;
   MethodRun run{method, seed, {}, true, 0, 0, -1};
   std::vector<std::unique_ptr<rl::LearnedExpert>> experts;
   for (sim::Subtask subtask : sim::kAllSubtasks) {
@@ -70,7 +73,9 @@ MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm
 
 MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
                          const Progress& progress) {
-  const sim::LocalEnvFactory world(sim::WorldModel::load(s.robot, s.object, s.world));
+  const auto envs =
+      arm_sim::make_env_factory(s.robot, s.object, s.world, sim::default_actuation(s.robot));
+  const sim::EnvFactory& world = *envs;
   MethodRun run{"e2e", seed, {}, true, 0, 0, -1};
   rl::SubtaskTrainingConfig config;
   config.algorithm = rl::ExpertAlgorithm::kEndToEnd;

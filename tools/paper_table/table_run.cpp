@@ -16,7 +16,8 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 std::string held_out_label(const ExperimentSettings& s, sim::Robot robot, std::uint64_t seed) {
   return std::string(sim::world_profile_name(s.world)) + " world, " +
          std::string(sim::robot_name(robot)) + " " + std::string(sim::object_name(s.object)) +
-         ", seed " + std::to_string(seed);
+         " (" + std::string(sim::actuation_name(sim::default_actuation(robot))) + " hand), seed " +
+         std::to_string(seed);
 }
 
 }  // namespace

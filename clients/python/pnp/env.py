@@ -63,13 +63,15 @@ class PickAndPlaceEnv(_gymnasium.Env if _gymnasium else _EnvBase):
     def __init__(self, sim_address: str | Endpoints | None = None, robot: str = "fetch",
                  object: str = "block", world: str = "gym", seed: int = 0,
                  reward_type: str = "sparse", timeout_s: float = 30.0,
-                 idle_timeout_s: float | None = None):
+                 idle_timeout_s: float | None = None, actuation: str = "default"):
         """idle_timeout_s: how long the service keeps the environment between calls (its
         default 300 s, at most 3600 s); after that a call raises NOT_FOUND and reset()
-        starts a new one."""
+        starts a new one. actuation: "mocap" (gym's hand), "arm" (the Panda moved by its
+        controller) or "default" (the robot's own: docs/SIMULATION.md)."""
         self._batch = SimBatch(sim_address, robot, object, world, seed, 1, reward_type, timeout_s,
-                               idle_timeout_s)
+                               idle_timeout_s, actuation)
         self.robot, self.object, self.world = robot, object, world
+        self.actuation = actuation
         self.reward_type = reward_type
         try:
             self.observation_space, self.action_space = goal_spaces(self._batch.spec)

@@ -12,6 +12,12 @@ OBJECTS = {
     "cylinder": common.OBJECT_SHAPE_CYLINDER,
 }
 WORLDS = {"paper": common.WORLD_PAPER, "gym": common.WORLD_GYM}
+# "default": the robot's own (the service decides: docs/SIMULATION.md, "Actuation").
+ACTUATIONS = {
+    "default": common.ACTUATION_UNSPECIFIED,
+    "mocap": common.ACTUATION_MOCAP,
+    "arm": common.ACTUATION_ARM,
+}
 ROLES = {
     "approach": common.ROLE_APPROACH,
     "manipulate": common.ROLE_MANIPULATE,

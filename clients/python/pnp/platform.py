@@ -106,7 +106,7 @@ class Platform:
             raise from_rpc_error(e, method, self.endpoints.inference) from None
 
     def train(self, role: str, robot: str = "fetch", object: str = "block", world: str = "gym",
-              seed: int = 0, preset: str | None = None, algorithm: str | None = None,
+              seed: int = 0, actuation: str = "default", preset: str | None = None, algorithm: str | None = None,
               max_steps: int | None = None, target_success: float | None = None,
               eval_interval_steps: int | None = None, eval_episodes: int | None = None,
               parent_checkpoint_id: int | None = None, prefix_checkpoint_ids=(),
@@ -127,6 +127,7 @@ class Platform:
             robot=names.to_enum(names.ROBOTS, robot, "robot"),
             object=names.to_enum(names.OBJECTS, object, "object"),
             world=names.to_enum(names.WORLDS, world, "world"),
+            actuation=names.to_enum(names.ACTUATIONS, actuation, "actuation"),
             seed=seed, stop=stop, preset=preset or "",
             parent_checkpoint_id=parent_checkpoint_id or 0,
             prefix_checkpoint_ids=list(prefix_checkpoint_ids),

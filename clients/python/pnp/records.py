@@ -20,6 +20,7 @@ def run_record(run) -> dict:
         "robot": names.to_name(names.ROBOTS, run.robot),
         "object": names.to_name(names.OBJECTS, run.object),
         "world": names.to_name(names.WORLDS, run.world),
+        "actuation": names.to_name(names.ACTUATIONS, run.actuation),
         "seed": run.seed,
         "state": names.to_name(names.RUN_STATES, run.state),
         "env_steps": run.env_steps,
@@ -76,6 +77,7 @@ def served_role_record(role) -> dict:
         "robot": names.to_name(names.ROBOTS, role.robot),
         "object": names.to_name(names.OBJECTS, role.object),
         "world": names.to_name(names.WORLDS, role.world),
+        "actuation": names.to_name(names.ACTUATIONS, role.actuation),
         "promote_time": _seconds(role.promote_time),
         "promoted_by": role.promoted_by or None,
     }

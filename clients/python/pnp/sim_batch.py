@@ -60,10 +60,12 @@ def goal_spaces(spec) -> tuple:
 class SimBatch:
     def __init__(self, sim_address: str | Endpoints | None, robot: str, object: str, world: str,
                  seed: int, count: int, reward_type: str, timeout_s: float,
-                 idle_timeout_s: float | None = None):
+                 idle_timeout_s: float | None = None, actuation: str = "default"):
         names.to_enum(names.ROBOTS, robot, "robot")
         names.to_enum(names.OBJECTS, object, "object")
         names.to_enum(names.WORLDS, world, "world")
+        names.to_enum(names.ACTUATIONS, actuation, "actuation")
+        self.actuation = actuation
         if reward_type not in reward.REWARD_TYPES:
             raise ValueError(f"reward_type: expected one of {', '.join(reward.REWARD_TYPES)}, "
                              f"got {reward_type!r}")
@@ -93,7 +95,7 @@ class SimBatch:
             self.release()
         if self._env_id is None:
             self._env_id = self.client.create_env(self.robot, self.object, self.world, self.seed,
-                                                  self.count, self.idle_timeout_s)
+                                                  self.count, self.idle_timeout_s, self.actuation)
         return self._env_id
 
     def reset_all(self, seed: int | None, options: dict | None, action_space) -> list:

@@ -67,11 +67,12 @@ class SimClient:
             raise from_rpc_error(e, method, self.address) from None
 
     def create_env(self, robot: str, object: str, world: str, seed: int, count: int,
-                   idle_timeout_s: float | None = None) -> str:
+                   idle_timeout_s: float | None = None, actuation: str = "default") -> str:
         request = sim.CreateEnvRequest(
             robot=names.to_enum(names.ROBOTS, robot, "robot"),
             object=names.to_enum(names.OBJECTS, object, "object"),
             world=names.to_enum(names.WORLDS, world, "world"),
+            actuation=names.to_enum(names.ACTUATIONS, actuation, "actuation"),
             seed=int(seed), count=int(count))
         if idle_timeout_s is not None:
             request.idle_timeout.FromNanoseconds(int(idle_timeout_s * 1e9))

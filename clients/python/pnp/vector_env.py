@@ -23,15 +23,16 @@ class VectorPickAndPlaceEnv:
     def __init__(self, num_envs: int, sim_address: str | Endpoints | None = None,
                  robot: str = "fetch", object: str = "block", world: str = "gym", seed: int = 0,
                  reward_type: str = "sparse", timeout_s: float = 30.0,
-                 idle_timeout_s: float | None = None):
+                 idle_timeout_s: float | None = None, actuation: str = "default"):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or \
                 not 1 <= num_envs <= MAX_ENVS:
             raise ValueError(f"num_envs: expected an integer from 1 to {MAX_ENVS}, "
                              f"got {num_envs!r}")
         self.num_envs = int(num_envs)
         self._batch = SimBatch(sim_address, robot, object, world, seed, self.num_envs,
-                               reward_type, timeout_s, idle_timeout_s)
+                               reward_type, timeout_s, idle_timeout_s, actuation)
         self.robot, self.object, self.world = robot, object, world
+        self.actuation = actuation
         self.reward_type = reward_type
         try:
             self.single_observation_space, self.single_action_space = goal_spaces(

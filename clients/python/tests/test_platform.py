@@ -66,11 +66,13 @@ def test_the_example_plays_the_same_episodes_as_pnpctl_evaluate(sim_server, infe
          "--episodes", "20", "--json", "--run-dir", "/nonexistent"],
         env=env, capture_output=True, text=True, timeout=300, check=True)
     ours = json.loads(example.stdout)
-    assert (ours["robot"], ours["object"], ours["world"]) == ("panda", "block", "paper")
+    assert (ours["robot"], ours["object"], ours["world"], ours["actuation"]) == (
+        "panda", "block", "paper", "mocap")
     reference = subprocess.run(
         [str(BIN_DIR / "pnpctl"), "--sim", sim_server.address, "--inference",
          inference_server.address, "evaluate", "--robot", "panda", "--object", "block",
-         "--world", "paper", "--episodes", "20", "--seed", str(HELD_OUT_SEED), "--json"],
+         "--world", "paper", "--actuation", "mocap", "--episodes", "20", "--seed",
+         str(HELD_OUT_SEED), "--json"],
         capture_output=True, text=True, timeout=300, check=True)
     theirs = json.loads(reference.stdout)
     for key in ("episodes", "successes", "env_steps", "seed", "sequences"):
