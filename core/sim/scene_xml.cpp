@@ -67,10 +67,10 @@ std::string head(Robot robot, ObjectShape object, WorldProfile profile) {
                      p.finger_armature, p.finger_kp, finger_force_range(p));
 }
 
-std::string object_geom(const ObjectSpec& spec) {
+std::string object_geom(const ObjectSpec& spec, const WorldParameters& p) {
   if (spec.is_cylinder) {
-    return fmt::format(R"(type="cylinder" size="{} {}" solref="0.004 1" solimp="0.95 0.99 0.001")",
-                       spec.half_width_m, spec.half_height_m);
+    return fmt::format(R"(type="cylinder" size="{} {}" {})", spec.half_width_m, spec.half_height_m,
+                       contact(p.cylinder_contact));
   }
   return fmt::format(R"(type="box" size="{0} {0} {1}")", spec.half_width_m, spec.half_height_m);
 }
@@ -101,8 +101,8 @@ std::string scene_bodies(ObjectShape object, WorldProfile profile) {
 )",
       layout::kTableCenter_x, layout::kTableCenter_y, layout::kTableTop_z / 2, layout::kTableHalfX,
       layout::kTableHalfY, layout::kTableTop_z / 2, start.x(), start.y() + 0.12,
-      layout::kTableTop_z + spec.half_height_m, object_geom(spec), spec.mass_kg,
-      world_parameters(profile).object_condim, start.x(), start.y(),
+      layout::kTableTop_z + spec.half_height_m, object_geom(spec, world_parameters(profile)),
+      spec.mass_kg, world_parameters(profile).object_condim, start.x(), start.y(),
       layout::kTableTop_z + spec.half_height_m, start.x(), start.y(), start.z());
 }
 

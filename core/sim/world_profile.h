@@ -65,7 +65,11 @@ struct WorldParameters {
   // Contact and control.
   ContactParameters robot_contact;    // every robot geom: links, palm, pads
   ContactParameters scenery_contact;  // floor, table and object
-  int solver_iterations = 0;          // MuJoCo's constraint solver, per step
+  // The cylinder is not gym's: a 2 cm cylinder held between the pads slips and turns out
+  // of the hand with gym's soft contacts (scripted Panda 0.54 of 1000 with every gym value);
+  // it keeps the stiff contact it was grasped with before the gym profile had gym's.
+  ContactParameters cylinder_contact;
+  int solver_iterations = 0;  // MuJoCo's constraint solver, per step
   // The arm's joints: damping (N m s/rad) and armature (kg m^2), every hinge alike.
   double arm_damping = 0;
   double arm_armature = 0;
