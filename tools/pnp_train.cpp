@@ -31,7 +31,8 @@ struct Options {
   std::string robot = "fetch", object = "block", out = "runs/latest";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};
   std::string actuation = "default";  // the robot's own (sim/actuation.h)
-  std::string init, experts, prefix, activation, preset;
+  std::string gripper_script;         // empty: the preset's
+  std::string init, experts, prefix, successors = "scripted", activation, preset;
   bool json = false, quiet = false, show_preset = false;
   std::size_t threads = 0;
 };
@@ -75,6 +76,9 @@ void add_ddpg_options(CLI::App& app, Options& o) {
   app.add_option("--updates-per-transition", d.updates_per_transition,
                  "> 0: gradient steps per stored transition instead of --updates-per-cycle")
       ->capture_default_str();
+  app.add_option("--gripper-script", o.gripper_script,
+                 "when the gripper is scripted: grasp_rule (closed once centred on the object) "
+                 "or per_subtask (the paper's code: approach open, then closed) [the preset's]");
   app.add_flag("--scripted-gripper,!--learned-gripper", o.spec.scripted_gripper,
                "keep the gripper command scripted, as the paper's code, or learn it [preset]");
   app.add_option("--demo-episodes", d.demo_episodes,
@@ -133,6 +137,24 @@ std::vector<std::string> prefix_specs(const Options& o) {
   return specs;
 }
 
+// The experts after the trained subtask in evaluation: scripted (the paper), or one
+// comma-separated checkpoint or "scripted" each.
+std::vector<std::string> successor_specs(const Options& o) {
+  const auto own = static_cast<std::size_t>(sim::parse_subtask(o.spec.role, "--role"));
+  const std::size_t count = sim::kNumSubtasks - own - 1;
+  if (o.successors == "scripted") return std::vector<std::string>(count, "scripted");
+  std::vector<std::string> specs = split(o.successors);
+  if (specs.size() != count) {
+    throw_invalid_argument("--successors",
+                           "scripted, or " + std::to_string(count) +
+                               " comma-separated checkpoints (or \"scripted\") for the subtasks "
+                               "after " +
+                               o.spec.role,
+                           "\"" + o.successors + "\"");
+  }
+  return specs;
+}
+
 // The choreographer's experts: --experts, or the three checkpoints in --out.
 std::vector<std::string> expert_specs(const Options& o) {
   std::vector<std::string> specs;
@@ -157,6 +179,8 @@ nlohmann::json train(Options& o) {
   o.spec.actuation = o.actuation == "default" ? sim::default_actuation(o.spec.robot)
                                               : sim::parse_actuation(o.actuation, "--actuation");
   sim::require_supported(o.spec.robot, o.spec.actuation, "--actuation");
+  if (!o.gripper_script.empty())
+    o.spec.gripper_script = sim::parse_gripper_script(o.gripper_script, "--gripper-script");
   training::TrainingInputs inputs;
   if (!o.init.empty()) inputs.init = nn::read_file(o.init);
   std::vector<std::string> experts;
@@ -164,6 +188,8 @@ nlohmann::json train(Options& o) {
     experts = expert_specs(o);
   } else if (o.spec.is_expert()) {
     experts = prefix_specs(o);
+    experts.push_back("scripted");  // the trained subtask's own entry
+    for (const std::string& after : successor_specs(o)) experts.push_back(after);
   }
   for (std::size_t k = 0; k < experts.size(); ++k)
     if (experts[k] != "scripted") inputs.experts[k] = nn::read_file(experts[k]);
@@ -190,7 +216,11 @@ nlohmann::json train(Options& o) {
   summary["checkpoint"] = o.out + "/" + o.spec.role + ".ckpt";
   if (!o.init.empty()) summary["init"] = o.init;
   if (o.spec.role == "hlc") summary["experts"] = experts;
-  if (o.spec.is_expert()) summary["prefix"] = experts;
+  if (o.spec.is_expert()) {
+    const auto own = static_cast<std::ptrdiff_t>(sim::parse_subtask(o.spec.role, "--role"));
+    summary["prefix"] = std::vector<std::string>(experts.begin(), experts.begin() + own);
+    summary["successors"] = std::vector<std::string>(experts.begin() + own + 1, experts.end());
+  }
   write_outputs(o, outcome.checkpoint, summary);
   return summary;
 }
@@ -259,6 +289,10 @@ int main(int argc, char** argv) {
   app.add_option("--prefix", o.prefix,
                  "experts before this subtask: scripted, chained (earlier checkpoints in --out) "
                  "or comma-separated checkpoints")
+      ->capture_default_str();
+  app.add_option("--successors", o.successors,
+                 "experts after this subtask in evaluation: scripted, or comma-separated "
+                 "checkpoints (backward chaining: docs/LEARNING.md)")
       ->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores)");
   app.add_flag("--json", o.json, "print the whole result as one JSON object");

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "nn/activation.h"
+#include "sim/gripper_script.h"
 
 namespace pnp::rl {
 
@@ -52,6 +53,8 @@ struct DdpgHerConfig {
   // on every new transition, and the wall time with them.
   double updates_per_transition = 0;
   bool learn_gripper = true;  // false: the gripper command stays scripted (paper-faithful)
+  // Which script commands it then (sim/gripper_script.h).
+  sim::GripperScript gripper_script = sim::GripperScript::kGraspRule;
   // Learning from demonstrations: before exploring, run this many scripted episodes of
   // the subtask (their steps count as training steps), store them in the replay, and
   // pretrain the actor on them by behaviour cloning. Without it the untrained actor's

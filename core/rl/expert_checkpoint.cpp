@@ -26,6 +26,7 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
       {"object", meta.object},
       {"world", meta.world},
       {"actuation", meta.actuation},
+      {"gripper_script", meta.gripper_script},
       {"hidden", meta.hidden},
       {"hidden_activation", std::string(nn::activation_name(meta.hidden_activation))},
       {"learn_gripper", meta.learn_gripper},
@@ -47,6 +48,11 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
   return w.finish();
 }
 
+std::optional<sim::GripperScript> scripted_gripper_of(const ExpertMeta& meta) {
+  if (meta.learn_gripper) return std::nullopt;
+  return sim::parse_gripper_script(meta.gripper_script, "checkpoint gripper_script");
+}
+
 LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
   const nn::CheckpointReader r(bytes);
   const nlohmann::json j = read_meta(r, kKind);
@@ -58,6 +64,8 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.object = m.at("object");
     out.world = m.value("world", "paper");
     out.actuation = m.value("actuation", "mocap");
+    out.gripper_script = m.value("gripper_script", "grasp_rule");
+    sim::parse_gripper_script(out.gripper_script, "checkpoint gripper_script");
     out.hidden = m.at("hidden").get<std::vector<int>>();
     // Checkpoints written before the field existed are ReLU networks.
     const auto activation = m.find("hidden_activation");

@@ -12,6 +12,7 @@
 #include "nn/mlp.h"
 #include "nn/normalizer.h"
 #include "rl/ddpg_her_agent.h"
+#include "sim/gripper_script.h"
 
 namespace pnp::rl {
 
@@ -30,7 +31,14 @@ struct ExpertMeta {
   std::string code_commit;
   std::string gemm_path{};          // nn/gemm_path.h: which products computed it ("" before kept)
   std::string actuation = "mocap";  // sim/actuation.h (checkpoints before it: mocap)
+  // With learn_gripper false, the script that commands the gripper (sim/gripper_script.h;
+  // checkpoints before it: the grasp rule, the only one then).
+  std::string gripper_script = "grasp_rule";
 };
+
+// The gripper script a served or evaluated expert uses: nullopt when it learned its
+// gripper. INVALID_ARGUMENT for an unknown script name.
+std::optional<sim::GripperScript> scripted_gripper_of(const ExpertMeta& meta);
 
 struct LoadedExpert {
   ExpertMeta meta;

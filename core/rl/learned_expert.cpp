@@ -1,14 +1,14 @@
 #include "rl/learned_expert.h"
 
 #include "common/error.h"
-#include "sim/scripted_expert.h"
+#include "sim/gripper_script.h"
 
 namespace pnp::rl {
 
 sim::Action LearnedExpert::act(sim::Subtask subtask, const sim::Observation& observation,
                                const sim::Goal& goal, const sim::TaskState& state) {
   sim::Action a = actor_.act(observation, goal);
-  if (!learn_gripper_) a(3) = sim::scripted_action(subtask, state)(3);
+  if (scripted_gripper_) a(3) = sim::scripted_gripper(*scripted_gripper_, subtask, state);
   return a;
 }
 
@@ -25,7 +25,7 @@ std::unique_ptr<LearnedExpert> learned_expert_from(const LoadedExpert& checkpoin
   return std::make_unique<LearnedExpert>(
       ActorSnapshot(checkpoint.actor, checkpoint.observation_normalizer, checkpoint.goal_normalizer,
                     checkpoint.meta.clip_obs),
-      checkpoint.meta.learn_gripper);
+      scripted_gripper_of(checkpoint.meta));
 }
 
 }  // namespace pnp::rl

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include "rl/end_to_end_evaluation.h"
 #include "rl/learned_expert.h"
@@ -13,6 +14,12 @@
 
 namespace pnp::rl {
 namespace {
+
+// The gripper script of an expert that does not learn its gripper; nullopt when it does.
+std::optional<sim::GripperScript> scripted_gripper(const DdpgHerConfig& ddpg) {
+  if (ddpg.learn_gripper) return std::nullopt;
+  return ddpg.gripper_script;
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -170,7 +177,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     }
     // Rollouts: one episode per environment, in parallel; each episode's environment
     // and noise seeds depend only on its index, so any thread count gives the same data.
-    const LearnedExpert learner(agent->snapshot(), config.ddpg.learn_gripper);
+    const LearnedExpert learner(agent->snapshot(), scripted_gripper(config.ddpg));
     const long long first_episode = result.train_episodes;
     const bool offline = config.algorithm == ExpertAlgorithm::kBcOffline;
     pool.parallel_for(episodes_per_cycle, [&](std::size_t i) {
@@ -230,7 +237,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     const auto eval_start = Clock::now();
     const std::uint64_t eval_seed =
         evaluation_round_seed(eval_stream, config.stop.fresh_eval_scenes, result.curve.size());
-    const LearnedExpert learned(agent->snapshot(), config.ddpg.learn_gripper);
+    const LearnedExpert learned(agent->snapshot(), scripted_gripper(config.ddpg));
     CurvePoint point;
     if (end_to_end) {
       const EndToEndReport report =
@@ -240,10 +247,10 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     } else {
       std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> experts{&scripted, &scripted,
                                                                        &scripted};
-      for (sim::Subtask before : sim::kAllSubtasks) {
-        const auto k = static_cast<std::size_t>(before);
-        if (before == config.subtask) break;
-        if (config.prefix[k]) experts[k] = config.prefix[k];
+      for (sim::Subtask other : sim::kAllSubtasks) {
+        const auto k = static_cast<std::size_t>(other);
+        const auto& around = other < config.subtask ? config.prefix : config.successors;
+        if (other != config.subtask && around[k]) experts[k] = around[k];
       }
       experts[static_cast<std::size_t>(config.subtask)] = &learned;
       const auto report =

@@ -41,6 +41,12 @@ struct SubtaskTrainingConfig {
   // already trained ("chained" training) trains each expert on the states it will start
   // from when the hierarchy runs (docs/LEARNING.md). Entries from `subtask` on are unused.
   std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> prefix{};
+  // Who runs the subtasks after this one in evaluation (training episodes end with the
+  // subtask); null entries, the default, are the scripted experts. Learned successors
+  // judge an expert by the task the hierarchy will do, where the scripted experts cannot
+  // finish it in time (on the arm-actuated world: docs/LEARNING.md, "Backward chaining").
+  // Entries up to `subtask` are unused.
+  std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> successors{};
   TrainingControl control;
   // Called after every evaluation with the agent as evaluated (to checkpoint it), before
   // the progress callback.

@@ -5,16 +5,19 @@
 // clones share the batcher, which is thread-safe.
 
 #include <memory>
+#include <optional>
 
 #include "serving/actor_batcher.h"
+#include "sim/gripper_script.h"
 #include "sim/subtask_policy.h"
 
 namespace pnp::serving {
 
 class BatchedExpert final : public sim::SubtaskPolicy {
  public:
-  BatchedExpert(std::shared_ptr<ActorBatcher> batcher, bool learn_gripper)
-      : batcher_(std::move(batcher)), learn_gripper_(learn_gripper) {}
+  BatchedExpert(std::shared_ptr<ActorBatcher> batcher,
+                std::optional<sim::GripperScript> scripted_gripper)
+      : batcher_(std::move(batcher)), scripted_gripper_(scripted_gripper) {}
 
   sim::Action act(sim::Subtask subtask, const sim::Observation& observation, const sim::Goal& goal,
                   const sim::TaskState& state) override;
@@ -22,7 +25,7 @@ class BatchedExpert final : public sim::SubtaskPolicy {
 
  private:
   std::shared_ptr<ActorBatcher> batcher_;
-  bool learn_gripper_;
+  std::optional<sim::GripperScript> scripted_gripper_;
 };
 
 }  // namespace pnp::serving

@@ -14,9 +14,10 @@ namespace {
 // learn its own), and every step answered by the actor.
 class EndToEndController final : public PolicyController {
  public:
-  EndToEndController(std::shared_ptr<ActorBatcher> batcher, bool learn_gripper,
-                     double object_width_m, std::int64_t checkpoint_id)
-      : actor_(std::move(batcher), learn_gripper),
+  EndToEndController(std::shared_ptr<ActorBatcher> batcher,
+                     std::optional<sim::GripperScript> scripted_gripper, double object_width_m,
+                     std::int64_t checkpoint_id)
+      : actor_(std::move(batcher), scripted_gripper),
         object_width_m_(object_width_m),
         checkpoint_id_(checkpoint_id) {}
 
@@ -84,7 +85,7 @@ ServedEndToEnd::ServedEndToEnd(rl::LoadedExpert policy, std::int64_t checkpoint_
 }
 
 std::unique_ptr<PolicyController> ServedEndToEnd::make_controller() const {
-  return std::make_unique<EndToEndController>(batcher_, policy_.meta.learn_gripper,
+  return std::make_unique<EndToEndController>(batcher_, rl::scripted_gripper_of(policy_.meta),
                                               2 * sim::object_spec(object_).half_width_m,
                                               checkpoint_id_);
 }

@@ -124,7 +124,8 @@ ServedHierarchy::ServedHierarchy(rl::LoadedChoreographer choreographer,
 std::unique_ptr<PolicyController> ServedHierarchy::make_controller() const {
   rl::HierarchyController::Experts experts;
   for (std::size_t k = 0; k < experts.size(); ++k) {
-    experts[k] = std::make_unique<BatchedExpert>(batchers_[k], experts_[k].meta.learn_gripper);
+    experts[k] =
+        std::make_unique<BatchedExpert>(batchers_[k], rl::scripted_gripper_of(experts_[k].meta));
   }
   return std::make_unique<HierarchyPolicyController>(
       std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),

@@ -18,12 +18,16 @@ Preset paper() {
   Preset p;
   p.name = "paper";
   p.summary =
-      "the paper as published: no demonstrations, scripted gripper, experts after scripted "
+      "the paper as published: no demonstrations, the gripper a constant per subtask, experts "
+      "after scripted "
       "prefixes, 40 updates per 2-episode cycle, a choreographer that sees observation and goal "
       "only, evaluation once per epoch";
   p.uses_demonstrations = false;
   p.chained_experts = false;
+  // As the original code drives it: a constant per subtask (approach open, manipulate and
+  // retract closed), whatever the state.
   p.scripted_gripper = true;
+  p.gripper_script = sim::GripperScript::kPerSubtask;
   p.ddpg = without_demonstrations({});
   p.ddpg.updates_per_cycle = 40;
   p.ddpg.updates_per_transition = 0;
@@ -120,6 +124,7 @@ TrainingSpec preset_spec(const Preset& preset, std::string_view role) {
   spec.ddpg = preset.ddpg;
   spec.a3c = preset.a3c;
   spec.scripted_gripper = preset.scripted_gripper;
+  spec.gripper_script = preset.gripper_script;
   spec.stop = role == "hlc"   ? preset.hlc_stop
               : role == "e2e" ? preset.e2e_stop
                               : preset.expert_stop;

@@ -6,11 +6,13 @@
 // from one (kDefaultPreset unless told otherwise); explicit flags or request fields then
 // override single values.
 //
-//   paper       the paper as published: no demonstrations, scripted gripper, experts
+//   paper       the paper as published: no demonstrations, the gripper a constant per
+//               subtask as its code commands it (approach open, then closed), experts
 //               after scripted prefixes, the original's 40 updates per 2-episode cycle,
 //               a choreographer that sees observation and goal only (no predicate inputs,
 //               no masking), evaluation once per epoch (5k steps).
-//   ours        every improvement of ours that uses no demonstrations: learned gripper,
+//   ours        every improvement of ours that uses no demonstrations: the gripper scripted
+//               by the grasp rule (closed once centred on the object: domain knowledge),
 //               chained experts, 0.5 updates per transition at the original's target
 //               rate per gradient step, experts and choreographer stopped at 97%, predicate inputs
 //               and masking for the choreographer (domain knowledge computed from observation and
@@ -27,6 +29,7 @@
 #include "rl/a3c_trainer.h"
 #include "rl/ddpg_her_config.h"
 #include "rl/training_progress.h"
+#include "sim/gripper_script.h"
 #include "training/training_spec.h"
 
 namespace pnp::training {
@@ -38,6 +41,7 @@ struct Preset {
   // Each expert trains after the learned experts before it (true) or after scripted ones.
   bool chained_experts = true;
   bool scripted_gripper = false;
+  sim::GripperScript gripper_script = sim::GripperScript::kGraspRule;  // when scripted
   rl::DdpgHerConfig ddpg;  // experts and the end-to-end baseline
   rl::A3cConfig a3c;       // the choreographer
   rl::StopRule expert_stop, hlc_stop, e2e_stop;

@@ -61,12 +61,14 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
   config.init = init ? &*init : nullptr;
   config.threads = hooks.threads;
   config.control = hooks.control;
-  std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks> prefix;
+  std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks> others;
   if (!end_to_end) {
-    for (std::size_t k = 0; k < static_cast<std::size_t>(config.subtask); ++k) {
-      if (inputs.experts[k].empty()) continue;
-      prefix[k] = policy_from(inputs.experts[k], role_at(k), "prefix[" + std::to_string(k) + "]");
-      config.prefix[k] = prefix[k].get();
+    const auto own = static_cast<std::size_t>(config.subtask);
+    for (std::size_t k = 0; k < others.size(); ++k) {
+      if (k == own || inputs.experts[k].empty()) continue;
+      const std::string field = (k < own ? "prefix[" : "successors[") + std::to_string(k) + "]";
+      others[k] = policy_from(inputs.experts[k], role_at(k), field);
+      (k < own ? config.prefix : config.successors)[k] = others[k].get();
     }
   }
   auto meta_at = [&](long long steps, double success) {
@@ -86,7 +88,8 @@ TrainingOutcome train_expert(const TrainingSpec& spec, const TrainingInputs& inp
                           spec.seed,
                           code_commit,
                           std::string(nn::gemm_path_name(nn::active_gemm_path())),
-                          std::string(sim::actuation_name(spec.actuation))};
+                          std::string(sim::actuation_name(spec.actuation)),
+                          std::string(sim::gripper_script_name(config.ddpg.gripper_script))};
   };
   auto save = [&](const rl::DdpgHerAgent& agent, long long steps, double success) {
     return rl::save_expert(meta_at(steps, success), agent.actor(), &agent.critic(),

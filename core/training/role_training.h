@@ -22,8 +22,9 @@ using Blob = std::vector<std::uint8_t>;
 // Checkpoints a run starts from. An empty blob is the scripted expert.
 struct TrainingInputs {
   Blob init;  // fine-tune (or resume) from this checkpoint of the same role; empty: fresh
-  // Experts: who runs the subtasks before this one (entries from the role on are unused).
-  // The choreographer: the three experts it sequences.
+  // Experts: who runs the subtasks before this one, and in evaluation after it (the role's
+  // own entry is unused; empty entries are scripted). The choreographer: the three experts
+  // it sequences.
   std::array<Blob, sim::kNumSubtasks> experts;
 };
 

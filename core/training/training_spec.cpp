@@ -53,6 +53,7 @@ rl::DdpgHerConfig effective_ddpg(const TrainingSpec& spec) {
   rl::DdpgHerConfig config = spec.ddpg;
   const bool end_to_end = spec.role == "e2e";
   config.learn_gripper = !spec.scripted_gripper || end_to_end;
+  config.gripper_script = spec.gripper_script;
   if (end_to_end) config.random_gripper = true;  // the standard end-to-end setup
   return config;
 }
@@ -75,6 +76,7 @@ nlohmann::json to_json(const TrainingSpec& s) {
             {"consecutive", s.stop.consecutive},
             {"fresh_eval_scenes", s.stop.fresh_eval_scenes}}},
           {"scripted_gripper", s.scripted_gripper},
+          {"gripper_script", sim::gripper_script_name(s.gripper_script)},
           {"ddpg",
            {{"hidden", d.hidden},
             {"hidden_activation", std::string(nn::activation_name(d.hidden_activation))},
@@ -188,6 +190,9 @@ TrainingSpec spec_from_json(const nlohmann::json& j) {
   read(j, "seed", s.seed, "");
   read(j, "preset", s.preset, "");
   read(j, "scripted_gripper", s.scripted_gripper, "");
+  std::string gripper_script(sim::gripper_script_name(s.gripper_script));
+  read(j, "gripper_script", gripper_script, "");
+  s.gripper_script = sim::parse_gripper_script(gripper_script, "gripper_script");
   if (const auto stop = j.find("stop"); stop != j.end()) {
     read(*stop, "max_steps", s.stop.max_steps, "stop.");
     read(*stop, "target_success", s.stop.target_success, "stop.");

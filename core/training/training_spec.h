@@ -13,6 +13,7 @@
 #include "rl/ddpg_her_config.h"
 #include "rl/training_progress.h"
 #include "sim/actuation.h"
+#include "sim/gripper_script.h"
 #include "sim/object_shape.h"
 #include "sim/robot.h"
 #include "sim/world_profile.h"
@@ -38,6 +39,8 @@ struct TrainingSpec {
   rl::StopRule stop;
   rl::DdpgHerConfig ddpg;
   bool scripted_gripper = false;  // experts: keep the gripper command scripted (the paper's)
+  // ... by this script (sim/gripper_script.h); specs stored before it: the grasp rule.
+  sim::GripperScript gripper_script = sim::GripperScript::kGraspRule;
   rl::A3cConfig a3c;
 
   bool is_expert() const;  // approach, manipulate or retract

@@ -13,12 +13,15 @@
 #include <thread>
 #include <tuple>
 
+#include "arm_sim/arm_actuated_env.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
+#include "services/common/convert.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
 #include "services/robot_sim/robot_controller_service.h"
+#include "serving/served_policy.h"
 #include "sim/panda_hand.h"
 #include "store/run_store.h"
 #include "support/checked_in_hierarchy.h"
@@ -72,6 +75,47 @@ class StalledPolicyService final : public pv1::PolicyService::Service {
       }
       if (context->IsCancelled()) break;
       stream->Write({});
+    }
+    return grpc::Status::OK;
+  }
+};
+
+// A policy service whose sessions answer with a fixed function of the observation (the
+// gripper driven at the object, then at the goal once grasped), as a gym-world, arm-
+// trained policy: the gateway then plans as the gym world reads actions.
+sim::Action pursue(const sim::Observation& o, const sim::Goal& goal) {
+  const sim::TaskState s = sim::TaskState::from(o, goal, 0.05);
+  const bool holding = sim::is_held(s);
+  const Eigen::Vector3d to = holding ? Eigen::Vector3d(goal - s.object) : s.object - s.gripper;
+  sim::Action a;
+  a.head<3>() = (6.0 * to).cwiseMax(-1.0).cwiseMin(1.0);
+  a(3) = (holding || (s.gripper - s.object).norm() < 0.015) ? -1 : 1;
+  return a;
+}
+
+class PursuingPolicyService final : public pv1::PolicyService::Service {
+ public:
+  grpc::Status GetServingStatus(grpc::ServerContext*, const pv1::GetServingStatusRequest*,
+                                pv1::GetServingStatusResponse* response) override {
+    auto* role = response->add_roles();
+    role->set_world(common::v1::WORLD_GYM);
+    role->set_robot(common::v1::ROBOT_PANDA);
+    role->set_actuation(common::v1::ACTUATION_ARM);
+    response->set_ready(true);
+    return grpc::Status::OK;
+  }
+  grpc::Status PredictSession(
+      grpc::ServerContext*,
+      grpc::ServerReaderWriter<pv1::PredictSessionResponse, pv1::PredictSessionRequest>* stream)
+      override {
+    pv1::PredictSessionRequest request;
+    while (stream->Read(&request)) {
+      const sim::Observation o = services::from_proto(request.observation(), "observation");
+      const sim::Action a = pursue(o, services::from_proto(request.goal(), "goal"));
+      pv1::PredictSessionResponse response;
+      services::to_proto(a, *response.mutable_prediction()->mutable_action());
+      response.mutable_prediction()->set_subtask(common::v1::SUBTASK_APPROACH);
+      if (!stream->Write(response)) break;
     }
     return grpc::Status::OK;
   }
@@ -298,6 +342,122 @@ TEST_F(GatewayEndToEnd, PicksAndPlacesThroughTheControllerStandIn) {
     EXPECT_LE(r.decisions, config.max_episode_steps);
     EXPECT_LE(r.arrival_waits, config.max_arrival_wait_periods * r.decisions);
   }
+}
+
+// Simulation that predicts the robot: the arm-actuated world plays an episode exactly as
+// the gateway plays it on the lockstep controller, step for step and bit for bit (the
+// same planning, the same controller intake, the same arm, the same observation), with
+// the same served policy; the gateway only stops early, on success. The gateway here is
+// the real one, over gRPC, with the inference service between it and the policy.
+TEST_F(GatewayEndToEnd, TheArmActuatedWorldPlaysWhatTheGatewayPlaysBitForBit) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  std::shared_ptr<const serving::ServedPolicy> served;
+  {
+    store::RunStore store((dir_ / "pnp.db").string());
+    served = serving::load_promoted(store, store.promotions(), serving::PolicyKind::kHierarchy);
+  }
+  arm_sim::ArmActuatedEnv env(
+      sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock, lockstep().world));
+  int compared = 0, successes = 0;
+  for (std::uint64_t seed = 900; seed < 905; ++seed) {
+    events_.clear();
+    EpisodeOptions traced = episode(seed);
+    traced.trace = true;
+    const EpisodeReport report =
+        GatewayEpisodeRunner(config, *controller_, *policy_stub_, recorder())
+            .run(traced, not_interrupted_);
+    ASSERT_EQ(report.refused + report.controller_refused + report.held_without_target, 0)
+        << "seed " << seed << ": a hold would let lockstep time stand still";
+    successes += report.success ? 1 : 0;
+    std::vector<nlohmann::json> cycles;
+    for (const auto& [event, fields] : events_)
+      if (event == "cycle") cycles.push_back(fields);
+    ASSERT_EQ(static_cast<int>(cycles.size()), report.decisions) << seed;
+
+    sim::Observation observation = env.reset(seed);
+    const serving::ServedPolicy::Lease controller = served->acquire();
+    for (const nlohmann::json& cycle : cycles) {
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto i = static_cast<Eigen::Index>(k);
+        ASSERT_EQ(observation(sim::obs::kGripperPos + i), cycle["grip_sim_m"][k].get<double>())
+            << "seed " << seed << " step " << cycle["step"] << " axis " << k;
+        ASSERT_EQ(observation(sim::obs::kObjectPos + i), cycle["object_sim_m"][k].get<double>())
+            << "seed " << seed << " step " << cycle["step"];
+      }
+      const serving::Decision decision = controller->act(observation, env.episode_goal());
+      for (std::size_t k = 0; k < sim::kActionSize; ++k)
+        ASSERT_EQ(decision.action(static_cast<Eigen::Index>(k)), cycle["action"][k].get<double>())
+            << "seed " << seed;
+      observation =
+          env.step(decision.action, env.episode_goal(), sim::Objective::kTask).observation;
+      ++compared;
+    }
+    // Where the gateway stopped on success, the world has the object at the goal too.
+    EXPECT_EQ(report.success, sim::is_task_success(sim::object_position(observation),
+                                                   env.episode_goal()))
+        << seed;
+  }
+  EXPECT_GT(compared, 100);
+  EXPECT_GT(successes, 0);
+}
+
+// The same in the gym world, whose actions move the measured grip point (the planning
+// path the paper world does not take), with a policy that is a function of the
+// observation, served by a stand-in policy service.
+TEST(ArmActuatedWorld, PlaysWhatTheGatewayPlaysInTheGymWorldBitForBit) {
+  arm_sim::StandInOptions options;
+  options.clock = arm_sim::ClockMode::kLockstep;
+  options.world = sim::WorldProfile::kGym;
+  arm_sim::ControllerStandIn arm(options);
+  services::RobotControllerServiceImpl controller_service(arm);
+  services::SimulatedSceneServiceImpl scene_service(arm);
+  services::ServerRuntime controller_server(services::ServerConfig{
+      "127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
+  PursuingPolicyService policy_service;
+  services::ServerRuntime policy_server(
+      services::ServerConfig{"127.0.0.1:0", 1 << 20, {&policy_service}, {}});
+  std::atomic<bool> not_interrupted{false};
+  ControllerLink link(grpc::CreateChannel(loopback(controller_server.port()),
+                                          grpc::InsecureChannelCredentials()),
+                      loopback(controller_server.port()), std::chrono::milliseconds(5000),
+                      not_interrupted);
+  auto policy = pv1::PolicyService::NewStub(grpc::CreateChannel(
+      loopback(policy_server.port()), grpc::InsecureChannelCredentials()));
+  link.acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  std::vector<nlohmann::json> cycles;
+  const EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
+    if (event == "cycle") cycles.push_back(fields);
+  };
+  arm_sim::ArmActuatedEnv env(
+      sim::WorldModel::load(sim::Robot::kPanda, sim::ObjectShape::kBlock, options.world));
+  const robot::GatewayConfig config = panda_config();
+  int compared = 0;
+  for (std::uint64_t seed = 910; seed < 913; ++seed) {
+    cycles.clear();
+    EpisodeOptions traced = episode(seed);
+    traced.trace = true;
+    const EpisodeReport report =
+        GatewayEpisodeRunner(config, link, *policy, log).run(traced, not_interrupted);
+    ASSERT_EQ(report.refused + report.controller_refused + report.held_without_target, 0) << seed;
+    ASSERT_EQ(static_cast<int>(cycles.size()), report.decisions) << seed;
+    sim::Observation observation = env.reset(seed);
+    for (const nlohmann::json& cycle : cycles) {
+      for (std::size_t k = 0; k < 3; ++k) {
+        ASSERT_EQ(observation(sim::obs::kGripperPos + static_cast<Eigen::Index>(k)),
+                  cycle["grip_sim_m"][k].get<double>())
+            << "seed " << seed << " step " << cycle["step"];
+      }
+      ASSERT_EQ(sim::finger_gap(observation), cycle["gripper_width_m"].get<double>());
+      observation = env.step(pursue(observation, env.episode_goal()), env.episode_goal(),
+                             sim::Objective::kTask)
+                        .observation;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 60);
+  policy_server.shutdown(std::chrono::milliseconds(500));
+  controller_server.shutdown(std::chrono::milliseconds(500));
 }
 
 // The arm lags the policy's mocap-trained expectation, so the gateway waits for it: after

@@ -47,8 +47,10 @@ MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm
     const std::string role(sim::subtask_name(subtask));
     auto out = rl::train_subtask_expert(
         world, config, [&](const rl::CurvePoint& p) { progress(method, role, p); });
-    experts.push_back(
-        std::make_unique<rl::LearnedExpert>(out.agent->snapshot(), config.ddpg.learn_gripper));
+    experts.push_back(std::make_unique<rl::LearnedExpert>(
+        out.agent->snapshot(),
+        config.ddpg.learn_gripper ? std::nullopt
+                                  : std::optional<sim::GripperScript>(config.ddpg.gripper_script)));
     add(run, role, std::move(out.result));
   }
   const std::array<const sim::SubtaskPolicy*, sim::kNumSubtasks> prototypes{

@@ -27,6 +27,7 @@ ExperimentSettings preset_settings(const training::Preset& preset, sim::WorldPro
   s.world = world;
   s.ddpg = preset.ddpg;
   s.ddpg.learn_gripper = !preset.scripted_gripper;
+  s.ddpg.gripper_script = preset.gripper_script;
   s.a3c = preset.a3c;
   s.chained = preset.chained_experts;
   s.expert_stop = preset.expert_stop;
