@@ -7,12 +7,14 @@
 #include <fstream>
 #include <vector>
 
+#include "arm_sim/arm_actuated_env.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "nn/checkpoint_io.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
 #include "services/robot_sim/robot_controller_service.h"
+#include "sim/world_model.h"
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"
 
@@ -109,6 +111,50 @@ std::uint64_t play_segment(const GatewayCellSpec& spec, policy::v1::PolicyServic
   return next;
 }
 
+// The same scenes in the arm-actuated world (what training evaluates on), with the same
+// served policy: the world's success at step 50, and at any step (the gateway stops at the
+// first success, so this is what it should report), and the scenes where the gateway and
+// the world disagree.
+nlohmann::json play_arm_world(const GatewayCellSpec& spec, const std::string& db,
+                              serving::PolicyKind kind,
+                              const std::vector<gateway::EpisodeReport>& gateway) {
+  std::shared_ptr<const serving::ServedPolicy> served;
+  {
+    store::RunStore store(db);
+    served = serving::load_promoted(store, store.promotions(), kind);
+  }
+  arm_sim::ArmWorldOptions options;
+  options.arm.acceleration_limits_rad_per_s2 =
+      arm_sim::arm_accelerations(spec.acceleration_scale, "--acceleration-scale");
+  arm_sim::ArmActuatedEnv env(sim::WorldModel::load(sim::Robot::kPanda, spec.shape, spec.world),
+                              options);
+  int at_end = 0, any_step = 0;
+  nlohmann::json disagreements = nlohmann::json::array();
+  for (const gateway::EpisodeReport& report : gateway) {
+    const serving::ServedPolicy::Lease controller = served->acquire();
+    sim::StepResult step;
+    step.observation = env.reset(report.seed);
+    bool reached = sim::is_task_success(sim::object_position(step.observation), env.episode_goal());
+    while (!env.needs_reset()) {
+      const serving::Decision d = controller->act(step.observation, env.episode_goal());
+      step = env.step(d.action, env.episode_goal(), sim::Objective::kTask);
+      reached = reached || step.task_success;
+    }
+    at_end += step.task_success ? 1 : 0;
+    any_step += reached ? 1 : 0;
+    if (reached != report.success) {
+      disagreements.push_back({{"seed", report.seed},
+                               {"gateway", report.success},
+                               {"gateway_end", gateway::episode_end_name(report.end)},
+                               {"arm_world_any_step", reached}});
+    }
+  }
+  const double n = gateway.empty() ? 1.0 : static_cast<double>(gateway.size());
+  return {{"success_at_step_50", at_end / n},
+          {"success_any_step", any_step / n},
+          {"disagreements_with_gateway", disagreements}};
+}
+
 }  // namespace
 
 nlohmann::json play_gateway_cell(const GatewayCellSpec& spec, const ServedCheckpoints& served) {
@@ -131,6 +177,7 @@ nlohmann::json play_gateway_cell(const GatewayCellSpec& spec, const ServedCheckp
   for (const auto& r : reports) solved_at_start += (r.success && r.steps == 0) ? 1 : 0;
   out["gateway_errors"] = gateway_errors;
   out["solved_at_start"] = solved_at_start;
+  out["arm_world"] = play_arm_world(spec, db, served.kind, reports);
   out["wall_s"] = std::chrono::duration<double>(Clock::now() - start).count();
   return out;
 }

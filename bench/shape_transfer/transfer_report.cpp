@@ -13,6 +13,13 @@ std::string rate_cell(const nlohmann::json& cell) {
                                  cell.at("successes").get<int>(), cell.at("episodes").get<int>());
   if (const auto errors = cell.at("gateway_errors").size(); errors > 0)
     text += fmt::format(", {} refused readings", errors);
+  // The same scenes in the arm-actuated world: what the gateway should see.
+  if (cell.contains("arm_world")) {
+    const nlohmann::json& world = cell.at("arm_world");
+    text += fmt::format("; arm world {:.3f}, {} scenes differ",
+                        world.at("success_any_step").get<double>(),
+                        world.at("disagreements_with_gateway").size());
+  }
   return text;
 }
 

@@ -12,11 +12,17 @@ std::size_t role_index(const std::string& role) {
   return static_cast<std::size_t>(it - kHierarchyRoles.begin());
 }
 
-// One role of the hierarchy trained for `object`, after (experts) or over (hlc) the
-// experts in `blobs`, from `init` (empty: fresh).
+// Which learned experts in `blobs` run around a trained expert.
+struct Around {
+  bool before = false;  // the ones before it, in training and evaluation
+  bool after = false;   // the ones after it, in evaluation
+};
+
+// One role of the hierarchy trained for `object`, with the experts in `blobs` around it
+// as `around` says (experts) or over them (hlc), from `init` (empty: fresh).
 training::Blob train_hierarchy_role(const TransferTraining& t, const std::string& role,
                                     sim::ObjectShape object, const HierarchyBlobs& blobs,
-                                    training::Blob init, long long max_steps,
+                                    Around around, training::Blob init, long long max_steps,
                                     std::vector<RoleTraining>& log) {
   training::TrainingSpec spec = training::preset_spec(*t.preset, role);
   spec.robot = sim::Robot::kPanda;
@@ -29,11 +35,11 @@ training::Blob train_hierarchy_role(const TransferTraining& t, const std::string
   if (!init.empty()) spec.ddpg.gripper_commitment = t.fine_tune_gripper_commitment;
   training::TrainingInputs inputs;
   inputs.init = std::move(init);
-  const std::size_t before = role == "hlc" ? sim::kNumSubtasks : role_index(role);
-  // The paper's experts train after scripted subtasks; the choreographer always sequences
-  // the learned ones.
-  if (role == "hlc" || t.preset->chained_experts) {
-    for (std::size_t k = 0; k < before; ++k) inputs.experts[k] = blobs.roles[k];
+  const std::size_t own = role == "hlc" ? sim::kNumSubtasks : role_index(role);
+  // The choreographer always sequences the learned experts.
+  for (std::size_t k = 0; k < sim::kNumSubtasks; ++k) {
+    const bool wanted = role == "hlc" || (k < own ? around.before : k > own && around.after);
+    if (wanted) inputs.experts[k] = blobs.roles[k];
   }
   training::TrainingHooks hooks;
   hooks.threads = t.threads;
@@ -50,10 +56,17 @@ training::Blob train_hierarchy_role(const TransferTraining& t, const std::string
 
 HierarchyBlobs train_block_hierarchy(const TransferTraining& t, std::vector<RoleTraining>& log) {
   HierarchyBlobs blobs;
-  for (std::size_t k = 0; k < kHierarchyRoles.size(); ++k) {
-    blobs.roles[k] =
-        train_hierarchy_role(t, kHierarchyRoles[k], sim::ObjectShape::kBlock, blobs, {}, 0, log);
+  const training::ExpertOrder order = training::expert_order(*t.preset, t.actuation);
+  const Around around{order == training::ExpertOrder::kForward,
+                      order == training::ExpertOrder::kBackward};
+  for (const sim::Subtask subtask : training::training_order(order)) {
+    const auto k = static_cast<std::size_t>(subtask);
+    blobs.roles[k] = train_hierarchy_role(t, kHierarchyRoles[k], sim::ObjectShape::kBlock, blobs,
+                                          around, {}, 0, log);
   }
+  const std::size_t hlc = kHierarchyRoles.size() - 1;
+  blobs.roles[hlc] = train_hierarchy_role(t, kHierarchyRoles[hlc], sim::ObjectShape::kBlock, blobs,
+                                          {}, {}, 0, log);
   return blobs;
 }
 
@@ -64,8 +77,11 @@ HierarchyBlobs fine_tune_for_shape(const TransferTraining& t, const HierarchyBlo
   for (std::size_t k = 0; k < kHierarchyRoles.size(); ++k) {
     const std::string role = kHierarchyRoles[k];
     if (std::find(adapted.begin(), adapted.end(), role) == adapted.end()) continue;
-    blobs.roles[k] =
-        train_hierarchy_role(t, role, shape, blobs, base.roles[k], t.fine_tune_max_steps, log);
+    // A fine-tune runs after the hierarchy's learned experts, as the served hierarchy does
+    // (the paper's step), unless its preset trains after scripted ones.
+    const Around around{t.preset->chained_experts, false};
+    blobs.roles[k] = train_hierarchy_role(t, role, shape, blobs, around, base.roles[k],
+                                          t.fine_tune_max_steps, log);
     blobs.objects[k] = shape;
   }
   return blobs;

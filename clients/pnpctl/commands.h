@@ -32,7 +32,7 @@ struct TrainArgs {
   std::vector<int> hidden;
   int workers = 0;
   std::int64_t parent = 0;
-  std::vector<std::int64_t> prefix, experts;
+  std::vector<std::int64_t> prefix, experts, successors;
   bool detach = false;  // return once created
   bool quiet = false;   // no progress bar
 };

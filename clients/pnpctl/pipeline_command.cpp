@@ -1,8 +1,10 @@
 // pipeline: the paper's method through the platform. The three experts are trained in
 // order, each after the learned experts before it (chained, docs/LEARNING.md) where the
-// preset says so and after scripted ones otherwise, then the
+// preset says so and after scripted ones otherwise (on the arm-actuated world backward:
+// retract first, each judged with the learned experts after it), then the
 // choreographer over them; the four final checkpoints are promoted together; the served hierarchy
 // is evaluated on held-out episodes through the simulation and inference services.
+#include <array>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -104,23 +106,33 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   wait_until_healthy(endpoints, {"sim", "approach", "manipulate", "retract", "hlc", "inference"},
                      args.wait_s);
   std::vector<RoleResult> results;
-  std::vector<std::int64_t> experts;
-  for (const char* role : {"approach", "manipulate", "retract"}) {
+  // Forward chaining: each expert after the learned ones before it; backward (the arm
+  // world): each judged with the learned ones after it; or every other one scripted.
+  const training::ExpertOrder order = training::expert_order(
+      training::find_preset(args.experts.preset, "--preset"),
+      resolve_actuation(args.experts.actuation, args.experts.robot, "--actuation"));
+  std::array<std::int64_t, sim::kNumSubtasks> trained{};
+  for (const sim::Subtask subtask : training::training_order(order)) {
+    const auto k = static_cast<std::size_t>(subtask);
     TrainArgs a = args.experts;
-    a.role = role;
-    // Chained: after the learned experts before it; else after scripted ones.
-    if (training::find_preset(a.preset, "--preset").chained_experts) a.prefix = experts;
+    a.role = std::string(sim::subtask_name(subtask));
+    for (std::size_t other = 0; other < trained.size(); ++other) {
+      if (order == training::ExpertOrder::kForward && other < k) a.prefix.push_back(trained[other]);
+      if (order == training::ExpertOrder::kBackward && other > k)
+        a.successors.push_back(trained[other]);
+    }
     results.push_back(train(endpoints, a));
-    experts.push_back(results.back().run.latest_checkpoint_id());
+    trained[k] = results.back().run.latest_checkpoint_id();
   }
+  const std::vector<std::int64_t> experts(trained.begin(), trained.end());
   TrainArgs hlc = args.choreographer;
   hlc.role = "hlc";
   hlc.experts = experts;
   results.push_back(train(endpoints, hlc));
   // The four together, in one transaction: the inference service never serves new experts
   // under an old choreographer.
-  std::vector<std::int64_t> hierarchy = experts;
-  hierarchy.push_back(results.back().run.latest_checkpoint_id());
+  const std::vector<std::int64_t> hierarchy{trained[0], trained[1], trained[2],
+                                             results.back().run.latest_checkpoint_id()};
   promote_command(endpoints, hierarchy);
   wait_until_served(endpoints, results.back().run.latest_checkpoint_id(), args.wait_s);
   const ServiceEvaluation held_out = evaluate_through_services(

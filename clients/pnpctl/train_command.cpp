@@ -38,6 +38,7 @@ train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
   r.set_parent_checkpoint_id(a.parent);
   for (auto id : a.prefix) r.add_prefix_checkpoint_ids(id);
   for (auto id : a.experts) r.add_expert_checkpoint_ids(id);
+  for (auto id : a.successors) r.add_successor_checkpoint_ids(id);
   return r;
 }
 

@@ -105,6 +105,29 @@ nlohmann::json names_json() {
 
 }  // namespace
 
+std::string_view expert_order_name(ExpertOrder order) {
+  switch (order) {
+    case ExpertOrder::kScriptedOthers:
+      return "scripted";
+    case ExpertOrder::kForward:
+      return "forward";
+    case ExpertOrder::kBackward:
+      return "backward";
+  }
+  throw_internal("expert_order_name: unknown ExpertOrder value");
+}
+
+std::array<sim::Subtask, sim::kNumSubtasks> training_order(ExpertOrder order) {
+  if (order == ExpertOrder::kBackward)
+    return {sim::Subtask::kRetract, sim::Subtask::kManipulate, sim::Subtask::kApproach};
+  return sim::kAllSubtasks;
+}
+
+ExpertOrder expert_order(const Preset& preset, sim::Actuation actuation) {
+  if (!preset.chained_experts) return ExpertOrder::kScriptedOthers;
+  return actuation == sim::Actuation::kArm ? ExpertOrder::kBackward : ExpertOrder::kForward;
+}
+
 std::span<const Preset> presets() {
   static const std::array<Preset, 3> all{paper(), ours(), ours_with_demonstrations()};
   return all;

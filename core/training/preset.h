@@ -21,6 +21,7 @@
 //   ours+demos  ours plus 10 scripted demonstration episodes per expert (their steps
 //               counted), 300 cloning updates and a behaviour-cloning term of weight 5.
 
+#include <array>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -29,7 +30,9 @@
 #include "rl/a3c_trainer.h"
 #include "rl/ddpg_her_config.h"
 #include "rl/training_progress.h"
+#include "sim/actuation.h"
 #include "sim/gripper_script.h"
+#include "sim/subtask.h"
 #include "training/training_spec.h"
 
 namespace pnp::training {
@@ -46,6 +49,22 @@ struct Preset {
   rl::A3cConfig a3c;       // the choreographer
   rl::StopRule expert_stop, hlc_stop, e2e_stop;
 };
+
+// The order a preset's experts train in, and who runs the other subtasks meanwhile.
+enum class ExpertOrder {
+  kScriptedOthers,  // any order, each after and before the scripted experts (the paper)
+  kForward,         // approach, manipulate, retract: each after the learned experts before it
+  kBackward,        // retract, manipulate, approach: each judged with the learned ones after it
+};
+std::string_view expert_order_name(ExpertOrder order);  // "scripted", "forward", "backward"
+// The subtasks in training order.
+std::array<sim::Subtask, sim::kNumSubtasks> training_order(ExpertOrder order);
+
+// How `preset` chains its experts in a world with `actuation`: forward, except that on
+// the arm-actuated world they chain backward, since there the scripted experts after an
+// expert run out of the 50 steps on a tenth of the scenes, and the stop rule could not
+// tell a good expert from a bad one (docs/LEARNING.md, "Backward chaining").
+ExpertOrder expert_order(const Preset& preset, sim::Actuation actuation);
 
 // Every preset, in the order above.
 std::span<const Preset> presets();

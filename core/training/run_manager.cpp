@@ -47,7 +47,7 @@ std::string expert_role(std::size_t k) {
 // The stored config: the spec and the checkpoints it starts from, so a resumed run is
 // rebuilt exactly.
 std::string config_json(const TrainingSpec& spec, const CheckpointRefs& refs) {
-  nlohmann::json checkpoints = {{"experts", refs.experts}};
+  nlohmann::json checkpoints = {{"experts", refs.experts}, {"successors", refs.successors}};
   checkpoints["parent"] = refs.parent ? nlohmann::json(*refs.parent) : nlohmann::json(nullptr);
   return nlohmann::json{{"spec", to_json(spec)}, {"checkpoints", checkpoints}}.dump();
 }
@@ -59,6 +59,8 @@ std::pair<TrainingSpec, CheckpointRefs> parse_config(const std::string& text) {
   if (!checkpoints.at("parent").is_null())
     refs.parent = checkpoints.at("parent").get<std::int64_t>();
   refs.experts = checkpoints.at("experts").get<std::vector<std::int64_t>>();
+  // Runs stored before successors existed evaluated with scripted ones.
+  refs.successors = checkpoints.value("successors", std::vector<std::int64_t>{});
   return {spec_from_json(j.at("spec")), refs};
 }
 
@@ -168,6 +170,22 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
     load_of_role(*handler_store_, refs.experts[k], expert_role(k),
                  (spec.role == "hlc" ? "expert_checkpoint_ids[" : "prefix_checkpoint_ids[") +
                      std::to_string(k) + "]");
+  }
+  if (!refs.successors.empty()) {
+    const std::size_t own =
+        spec.is_expert() ? static_cast<std::size_t>(sim::parse_subtask(spec.role)) : 0;
+    const std::size_t after = spec.is_expert() ? sim::kNumSubtasks - own - 1 : 0;
+    if (refs.successors.size() != after) {
+      throw_invalid_argument(
+          "successor_checkpoint_ids",
+          spec.is_expert() ? std::to_string(after) + " ids (the experts after " + spec.role + ")"
+                           : "none (only subtask experts take them)",
+          std::to_string(refs.successors.size()) + " ids");
+    }
+    for (std::size_t k = 0; k < after; ++k) {
+      load_of_role(*handler_store_, refs.successors[k], expert_role(own + 1 + k),
+                   "successor_checkpoint_ids[" + std::to_string(k) + "]");
+    }
   }
   store::RunSpec record{spec.role,
                         spec.algorithm,
@@ -485,6 +503,10 @@ RunManager::Turn RunManager::train(store::Store& store, const store::RunRecord& 
     if (refs.parent) inputs.init = store.load_checkpoint(*refs.parent).blob;
     for (std::size_t k = 0; k < refs.experts.size(); ++k)
       inputs.experts[k] = store.load_checkpoint(refs.experts[k]).blob;
+    const std::size_t first_after =
+        sim::kNumSubtasks - refs.successors.size();  // successors end at retract
+    for (std::size_t k = 0; k < refs.successors.size(); ++k)
+      inputs.experts[first_after + k] = store.load_checkpoint(refs.successors[k]).blob;
     TrainingHooks hooks;
     hooks.threads = options_.threads;
     hooks.environments = options_.environments;

@@ -39,6 +39,9 @@ struct CheckpointRefs {
   // Experts: those before the trained subtask, in subtask order (empty: scripted).
   // Choreographer: approach, manipulate, retract (empty: the promoted ones at creation).
   std::vector<std::int64_t> experts;
+  // Experts: those after the trained subtask in evaluation, in subtask order (empty:
+  // scripted; backward chaining, docs/LEARNING.md).
+  std::vector<std::int64_t> successors;
 };
 
 struct RunManagerOptions {

@@ -106,12 +106,17 @@ std::pair<training::TrainingSpec, training::CheckpointRefs> from_proto(
     if (r.prefix_checkpoint_ids_size() > 0)
       throw_invalid_argument("prefix_checkpoint_ids", "none for the choreographer",
                              std::to_string(r.prefix_checkpoint_ids_size()) + " ids");
+    if (r.successor_checkpoint_ids_size() > 0)
+      throw_invalid_argument("successor_checkpoint_ids", "none for the choreographer",
+                             std::to_string(r.successor_checkpoint_ids_size()) + " ids");
     refs.experts.assign(r.expert_checkpoint_ids().begin(), r.expert_checkpoint_ids().end());
   } else {
     if (r.expert_checkpoint_ids_size() > 0)
       throw_invalid_argument("expert_checkpoint_ids", "none (only the choreographer takes them)",
                              std::to_string(r.expert_checkpoint_ids_size()) + " ids");
     refs.experts.assign(r.prefix_checkpoint_ids().begin(), r.prefix_checkpoint_ids().end());
+    refs.successors.assign(r.successor_checkpoint_ids().begin(),
+                           r.successor_checkpoint_ids().end());
   }
   return {spec, refs};
 }

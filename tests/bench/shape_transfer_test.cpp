@@ -86,6 +86,10 @@ TEST(ShapeTransferReport, TheTableShowsEachCellAndTheFineTuningSteps) {
   cells["block"]["block_hierarchy"] = cell(199, 200, 0);
   cells["cylinder"]["block_hierarchy"] = cell(150, 200, 0);
   cells["cylinder"]["fine_tuned"] = cell(190, 200, 1);
+  cells["block"]["block_hierarchy"]["arm_world"] = {
+      {"success_at_step_50", 0.99},
+      {"success_any_step", 0.995},
+      {"disagreements_with_gateway", nlohmann::json::array()}};
   nlohmann::json fine_tuning;
   fine_tuning["cylinder"] = nlohmann::json::array({{{"role", "retract/cylinder"},
                                                     {"reached", true},
@@ -97,7 +101,9 @@ TEST(ShapeTransferReport, TheTableShowsEachCellAndTheFineTuningSteps) {
                                                     {"train_env_steps", 60000}}});
   const std::string md = transfer_markdown({"block", "cylinder"}, columns, cells, fine_tuning);
   EXPECT_NE(md.find("| shape | (a) tuned | (b) block |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| block | - | 0.995 (199/200) | - (trained on block) |"), std::string::npos)
+  EXPECT_NE(md.find("| block | - | 0.995 (199/200); arm world 0.995, 0 scenes differ | - "
+                    "(trained on block) |"),
+            std::string::npos)
       << md;
   EXPECT_NE(md.find("| cylinder | 0.950 (190/200), 1 refused readings | 0.750 (150/200) | "
                     "retract/cylinder 12.0k, (a+) hlc/cylinder 60.0k (cap, not reached) |"),

@@ -303,6 +303,74 @@ TEST(Pipeline, ATrainerOnTheSimulationServiceTrainsAsInProcess) {
 
 // Refusals that only the training service can make reach pnpctl's user as one line with
 // the field, and leave nothing in the store.
+// On the arm-actuated world the experts chain backward: retract first, then each one
+// judged with the learned experts after it; the served hierarchy says it was trained
+// through the arm. Every trainer and the held-out evaluation step the arm world.
+TEST(Pipeline, OnTheArmWorldTheExpertsChainBackward) {
+  TempDir dir("pipeline_arm");
+  const std::string db = dir.file("pnp.db");
+  ChildProcess sim("sim", {bin("pnp-sim-server"), "--address", "127.0.0.1:0"}, dir.path());
+  std::map<std::string, std::unique_ptr<ChildProcess>> trainers;
+  for (const auto& role : kRoles)
+    trainers[role] =
+        std::make_unique<ChildProcess>("train-" + role, train_server(role, db), dir.path());
+  ChildProcess inference("inference",
+                         {bin("pnp-inference-server"), "--address", "127.0.0.1:0", "--reload-ms",
+                          "100", "--create-db", "--db", db},
+                         dir.path());
+  std::vector<std::string> args{"--sim",       loopback(sim.port()),
+                                "--inference", loopback(inference.port()),
+                                "--e2e",       "127.0.0.1:1"};
+  for (const auto& role : kRoles) {
+    ASSERT_GT(trainers[role]->port(), 0) << trainers[role]->diagnostics();
+    args.push_back("--" + role);
+    args.push_back(loopback(trainers[role]->port()));
+  }
+  const std::string results_file = dir.file("results.json");
+  for (const std::string& word :
+       words("pipeline --robot panda --actuation arm --seed 1 --max-steps 200 --eval-interval "
+             "100 --eval-episodes 2 --hidden 16,16 --hlc-max-steps 200 --hlc-workers 1 --quiet "
+             "--wait 60 --held-out-episodes 2 --json-out " +
+             results_file))
+    args.push_back(word);
+  const CliResult pipeline = run_pnpctl(dir, "pnpctl-pipeline", args);
+  ASSERT_TRUE(pipeline.status && pipeline.status->ok()) << pipeline.out << pipeline.err;
+  EXPECT_NE(pipeline.out.find("(seed 424242, gym/panda/block, arm hand)"), std::string::npos)
+      << pipeline.out;
+  const auto results = nlohmann::json::parse(read_file(results_file));
+  EXPECT_EQ(results.at("actuation"), "arm");
+  std::vector<std::string> order;
+  std::map<std::string, long long> run_of, checkpoint_of;
+  for (const auto& r : results.at("roles")) {
+    order.push_back(r.at("role").get<std::string>());
+    run_of[order.back()] = r.at("run_id").get<long long>();
+    checkpoint_of[order.back()] = r.at("checkpoint_id").get<long long>();
+  }
+  EXPECT_EQ(order, (std::vector<std::string>{"retract", "manipulate", "approach", "hlc"}));
+  for (auto& [role, server] : trainers) expect_clean_exit(*server);
+  expect_clean_exit(inference);
+  expect_clean_exit(sim);
+
+  const StoreReader store(db);
+  auto refs_of = [&](const std::string& role) {
+    return nlohmann::json::parse(
+               store.text("SELECT config_json FROM runs WHERE id = ?", {run_of[role]}))
+        .at("checkpoints");
+  };
+  auto ids = [](const nlohmann::json& j) { return j.get<std::vector<long long>>(); };
+  EXPECT_EQ(ids(refs_of("retract").at("successors")), std::vector<long long>{});
+  EXPECT_EQ(ids(refs_of("manipulate").at("successors")),
+            std::vector<long long>{checkpoint_of["retract"]});
+  EXPECT_EQ(ids(refs_of("approach").at("successors")),
+            (std::vector<long long>{checkpoint_of["manipulate"], checkpoint_of["retract"]}));
+  for (const char* role : {"retract", "manipulate", "approach"}) {
+    EXPECT_EQ(ids(refs_of(role).at("experts")), std::vector<long long>{}) << role;
+    const auto spec = nlohmann::json::parse(
+        store.text("SELECT config_json FROM runs WHERE id = ?", {run_of[role]}))["spec"];
+    EXPECT_EQ(spec.at("actuation"), "arm") << role;
+  }
+}
+
 TEST(Pipeline, PnpctlReportsTheServicesRefusalsAndNothingIsStored) {
   TempDir dir("pnpctl_refusals");
   ChildProcess trainer("train-approach", train_server("approach", dir.file("pnp.db")), dir.path());

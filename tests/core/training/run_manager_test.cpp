@@ -138,14 +138,26 @@ TEST(RunManager, RefusalsStoreNothing) {
                           "actor_learning_rate"));
   EXPECT_TRUE(throws_code(
       [&] {
-        manager.create(small_spec("manipulate"), {42, {}});
+        manager.create(small_spec("manipulate"), {42, {}, {}});
       },
       ErrorCode::kNotFound, "checkpoint 42"));
   EXPECT_TRUE(throws_code(
       [&] {
-        manager.create(small_spec("manipulate"), {std::nullopt, {1, 2}});
+        manager.create(small_spec("manipulate"), {std::nullopt, {1, 2}, {}});
       },
       ErrorCode::kInvalidArgument, "prefix_checkpoint_ids"));
+  // Backward chaining: manipulate is judged with one expert after it, retract.
+  EXPECT_TRUE(throws_code(
+      [&] {
+        manager.create(small_spec("manipulate"), {std::nullopt, {}, {1, 2}});
+      },
+      ErrorCode::kInvalidArgument,
+      "successor_checkpoint_ids: expected 1 ids (the experts after manipulate), got 2 ids"));
+  EXPECT_TRUE(throws_code(
+      [&] {
+        manager.create(small_spec("manipulate"), {std::nullopt, {}, {7}});
+      },
+      ErrorCode::kNotFound, "checkpoint 7"));
   EXPECT_TRUE(manager.list({}).empty());
 }
 
