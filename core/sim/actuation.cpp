@@ -22,8 +22,13 @@ Actuation parse_actuation(std::string_view name, std::string_view field) {
 }
 
 Actuation default_actuation(Robot robot) {
-  (void)robot;
-  return Actuation::kMocap;
+  switch (robot) {
+    case Robot::kFetch:  // gym's control: gym is the benchmark
+      return Actuation::kMocap;
+    case Robot::kPanda:          // until an arm-trained hierarchy holds its results on the arm
+      return Actuation::kMocap;  // (docs/RESULTS.md, "Trained through the arm's controller")
+  }
+  throw_internal("default_actuation: unknown Robot value");
 }
 
 void require_supported(Robot robot, Actuation actuation, std::string_view field) {

@@ -31,7 +31,8 @@ std::string_view actuation_name(Actuation actuation);
 // Parses "mocap" or "arm"; anything else is an INVALID_ARGUMENT naming `field`.
 Actuation parse_actuation(std::string_view name, std::string_view field = "actuation");
 
-// What a robot is trained and evaluated with unless told otherwise.
+// What a robot is trained and evaluated with unless told otherwise: mocap for both today
+// (the Panda's becomes arm once an arm-trained hierarchy holds its results: docs/RESULTS.md).
 Actuation default_actuation(Robot robot);
 
 // INVALID_ARGUMENT naming `field` when `robot` cannot be driven with `actuation` (only

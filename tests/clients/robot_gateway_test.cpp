@@ -344,6 +344,33 @@ TEST_F(GatewayEndToEnd, PicksAndPlacesThroughTheControllerStandIn) {
   }
 }
 
+// The checked-in hierarchy was trained on the mocap hand: the gateway says so once per run
+// (not per episode), and with --strict refuses it before anything moves.
+TEST_F(GatewayEndToEnd, WarnsOnceAboutAMocapTrainedPolicyAndStrictRefusesIt) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+  runner.run(episode(900), not_interrupted_);
+  runner.run(episode(901), not_interrupted_);
+  ASSERT_EQ(count("policy_warning"), 1);
+  for (const auto& [event, fields] : events_) {
+    if (event != "policy_warning") continue;
+    EXPECT_NE(fields["reason"].get<std::string>().find("trained on the mocap hand"),
+              std::string::npos)
+        << fields.dump();
+  }
+  const std::uint64_t sequence = arm_->state().sequence;
+  GatewayEpisodeRunner strict(config, *controller_, *policy_stub_, recorder(), true);
+  try {
+    strict.run(episode(902), not_interrupted_);
+    FAIL() << "a mocap-trained policy drove the arm under --strict";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("(--strict)"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(arm_->state().sequence, sequence);  // nothing was sent
+}
+
 // Simulation that predicts the robot: the arm-actuated world plays an episode exactly as
 // the gateway plays it on the lockstep controller, step for step and bit for bit (the
 // same planning, the same controller intake, the same arm, the same observation), with
@@ -394,8 +421,8 @@ TEST_F(GatewayEndToEnd, TheArmActuatedWorldPlaysWhatTheGatewayPlaysBitForBit) {
       ++compared;
     }
     // Where the gateway stopped on success, the world has the object at the goal too.
-    EXPECT_EQ(report.success, sim::is_task_success(sim::object_position(observation),
-                                                   env.episode_goal()))
+    EXPECT_EQ(report.success,
+              sim::is_task_success(sim::object_position(observation), env.episode_goal()))
         << seed;
   }
   EXPECT_GT(compared, 100);
@@ -412,18 +439,17 @@ TEST(ArmActuatedWorld, PlaysWhatTheGatewayPlaysInTheGymWorldBitForBit) {
   arm_sim::ControllerStandIn arm(options);
   services::RobotControllerServiceImpl controller_service(arm);
   services::SimulatedSceneServiceImpl scene_service(arm);
-  services::ServerRuntime controller_server(services::ServerConfig{
-      "127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
+  services::ServerRuntime controller_server(
+      services::ServerConfig{"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
   PursuingPolicyService policy_service;
   services::ServerRuntime policy_server(
       services::ServerConfig{"127.0.0.1:0", 1 << 20, {&policy_service}, {}});
   std::atomic<bool> not_interrupted{false};
-  ControllerLink link(grpc::CreateChannel(loopback(controller_server.port()),
-                                          grpc::InsecureChannelCredentials()),
-                      loopback(controller_server.port()), std::chrono::milliseconds(5000),
-                      not_interrupted);
-  auto policy = pv1::PolicyService::NewStub(grpc::CreateChannel(
-      loopback(policy_server.port()), grpc::InsecureChannelCredentials()));
+  ControllerLink link(
+      grpc::CreateChannel(loopback(controller_server.port()), grpc::InsecureChannelCredentials()),
+      loopback(controller_server.port()), std::chrono::milliseconds(5000), not_interrupted);
+  auto policy = pv1::PolicyService::NewStub(
+      grpc::CreateChannel(loopback(policy_server.port()), grpc::InsecureChannelCredentials()));
   link.acquire_lease("test-gateway", std::chrono::milliseconds(5000));
   std::vector<nlohmann::json> cycles;
   const EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
