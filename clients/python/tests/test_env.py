@@ -217,3 +217,31 @@ def test_an_environment_the_service_dropped_is_replaced_at_the_next_reset(sim_se
     again, _ = env.reset()  # a new batch: the seed's episodes from the first
     np.testing.assert_array_equal(again["desired_goal"], first["desired_goal"])
     env.close()  # nothing left to release, and no error
+
+
+def test_the_arm_actuated_panda_lags_the_mocap_hand_on_the_same_episode(sim_server):
+    """actuation="arm": the Panda's hand moved by its controller (docs/SIMULATION.md),
+    the same episode (object, goal) as the mocap world's for the seed, the hand slower."""
+    up = np.array([0.0, 0.0, 1.0, 0.0])
+    rises = {}
+    for actuation in ("mocap", "arm"):
+        with pnp.PickAndPlaceEnv(sim_server.address, robot="panda", seed=7,
+                                 actuation=actuation) as e:
+            obs, _ = e.reset()
+            start = obs["observation"][2]
+            after, _, _, _, _ = e.step(up)
+            rises[actuation] = after["observation"][2] - start
+            goals = obs["desired_goal"]
+        rises[actuation + "_goal"] = goals
+    np.testing.assert_allclose(rises["mocap_goal"], rises["arm_goal"], atol=1e-9)
+    assert 0 < rises["arm"] < 0.5 * rises["mocap"]
+
+
+def test_an_arm_actuated_fetch_is_refused_naming_actuation(sim_server):
+    with pytest.raises(pnp.PlatformError) as e:
+        with pnp.PickAndPlaceEnv(sim_server.address, robot="fetch", actuation="arm") as env:
+            env.reset()
+    assert e.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "actuation" in e.value.details
+    with pytest.raises(ValueError, match="actuation: expected one of default, mocap, arm"):
+        pnp.PickAndPlaceEnv(sim_server.address, robot="panda", actuation="teleport")
