@@ -5,7 +5,6 @@
 #include "services/common/sim_convert.h"
 #include "services/common/status.h"
 #include "sim/step_rules.h"
-#include "sim/world_layout.h"
 
 namespace pnp::sim_client {
 
@@ -17,7 +16,8 @@ RemoteEnvironment::RemoteEnvironment(std::shared_ptr<grpc::Channel> channel, std
                                      std::chrono::milliseconds connect_timeout)
     : stub_(sv1::SimulationService::NewStub(channel)),
       address_(std::move(address)),
-      object_width_m_(2 * sim::object_spec(object).half_width_m) {
+      object_width_m_(2 * sim::object_spec(object).half_width_m),
+      episode_steps_(sim::episode_steps(actuation)) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + connect_timeout);
   context.set_wait_for_ready(true);  // a service still starting is waited for, up to the deadline
@@ -79,7 +79,7 @@ void RemoteEnvironment::take(const sv1::EnvState& state) {
   episode_goal_ = services::from_proto(state.episode_goal(), "episode_goal");
   elapsed_steps_ = state.elapsed_steps();
   // A fault restarts the episode on the service (elapsed 0), as PickPlaceEnv does.
-  needs_reset_ = elapsed_steps_ >= sim::layout::kEpisodeSteps;
+  needs_reset_ = elapsed_steps_ >= episode_steps_;
 }
 
 const sim::Observation& RemoteEnvironment::reset(std::uint64_t seed) {

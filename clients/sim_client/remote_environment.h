@@ -54,6 +54,7 @@ class RemoteEnvironment final : public sim::Environment {
   std::unique_ptr<pnp::sim::v1::SimulationService::Stub> stub_;
   std::string address_;
   double object_width_m_;
+  int episode_steps_;  // the actuation's (sim::episode_steps), as the service counts them
   std::string env_id_;
   grpc::ClientContext stream_context_;
   std::unique_ptr<grpc::ClientReaderWriter<pnp::sim::v1::StreamRolloutRequest,

@@ -2,8 +2,8 @@
 
 #include "arm_sim/controller_intake.h"
 #include "robot/target_planner.h"
+#include "sim/actuation.h"
 #include "sim/step_rules.h"
-#include "sim/world_layout.h"
 
 namespace pnp::arm_sim {
 
@@ -76,7 +76,7 @@ sim::StepResult ArmActuatedEnv::step(std::span<const double> action, std::span<c
   } else {
     perceive();
     ++elapsed_steps_;
-    needs_reset_ = elapsed_steps_ >= sim::layout::kEpisodeSteps;
+    needs_reset_ = elapsed_steps_ >= sim::episode_steps(sim::Actuation::kArm);
   }
   result.observation = observation_;
   sim::score_step(result, task_state(), objective, agent_goal, goal_, needs_reset_);

@@ -13,7 +13,8 @@
 // period). So what a policy learns here is what it meets on the controller, bit for bit
 // (tests/core/arm_sim/arm_actuated_env_test.cpp plays both side by side).
 //
-// Episodes, goals, rewards, predicates and faults are sim::PickPlaceEnv's: the same seed
+// Episodes last the arm's 75 steps (sim::episode_steps: the hand needs longer than the
+// mocap hand's 50); goals, rewards, predicates and faults are sim::PickPlaceEnv's: the same seed
 // gives the same object and goal, a physics fault ends the episode and starts a fresh one
 // from the same random stream. Not thread-safe: one owner calls everything.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Evaluates an end-to-end policy: it acts on the episode goal for all 50 steps; success
+// Evaluates an end-to-end policy: it acts on the episode goal for all the episode's steps; success
 // is read at the last step, from the object.
 
 #include <memory>

@@ -7,7 +7,7 @@
 // The semi-Markov form takes one discount per step instead of gamma: a choreographer
 // decision whose expert ran k environment steps is discounted gamma^k, so a plan that
 // wastes steps is worth less than one that does not (with a per-decision gamma a detour
-// costs almost nothing, and the success at step 50 is the same).
+// costs almost nothing, and the success at the last step is the same).
 
 #include <span>
 #include <vector>

@@ -120,8 +120,8 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
     out.decisions.push_back(d);
     if (last.fault != sim::PhysicsFault::kNone) break;
     // Once retract has placed the object, the arm idles with the gripper closed until
-    // step 50 (the paper's protocol): further decisions could only hold or undo it, and
-    // ~30 one-step "hold" decisions buried the three that matter.
+    // the episode's last step (the paper's protocol): further decisions could only hold or undo it,
+    // and ~30 one-step "hold" decisions buried the three that matter.
     if (subtask == sim::Subtask::kRetract && last.objective_done) {
       while (!env.needs_reset()) {
         last = env.step(sim::idle_action(), env.episode_goal(), sim::Objective::kTask);

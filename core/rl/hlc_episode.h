@@ -1,11 +1,11 @@
 #pragma once
 // One episode driven by the choreographer: at each decision it picks a subtask, whose
 // expert runs until its termination predicate fires (after at least one step), its step
-// cap, or the episode's end; then it decides again, until step 50 or until retract ends
-// by its predicate (the object is placed: the arm then idles, gripper closed, to step
-// 50). Any subtask whose predicate does not already hold may be picked at any decision. Sparse
-// reward: +1 at the last decision if the task succeeded (object within 0.05 m of the goal at step
-// 50), 0 otherwise.
+// cap, or the episode's end; then it decides again, until the episode's last step (50; 75
+// on the arm) or until retract ends by its predicate (the object is placed: the arm then
+// idles, gripper closed, to the last step). Any subtask whose predicate does not already
+// hold may be picked at any decision. Sparse reward: +1 at the last decision if the task
+// succeeded (object within 0.05 m of the goal at the last step), 0 otherwise.
 
 #include <array>
 #include <cstdint>

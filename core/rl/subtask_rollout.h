@@ -40,7 +40,7 @@ SubtaskEpisode run_subtask_episode(sim::Environment& env, sim::Subtask subtask,
                                    const ExplorationNoise* noise, std::uint64_t episode_seed,
                                    Rng& noise_rng);
 
-// One end-to-end training episode: the policy acts on the episode goal for all 50 steps
+// One end-to-end training episode: the policy acts on the episode goal for all its steps
 // (objective "task"); the whole episode is one segment.
 SubtaskEpisode run_end_to_end_episode(sim::Environment& env, sim::SubtaskPolicy& policy,
                                       const ExplorationNoise& noise, std::uint64_t episode_seed,

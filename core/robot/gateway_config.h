@@ -11,7 +11,7 @@
 //               "gripper_min_width_m": 0, "gripper_max_width_m": 0.08,
 //               "quaternion_norm_tolerance": 0.001},
 //    "policy_period_s": 0.04, "deadman_timeout_s": 0.1, "lease_timeout_s": 0.5,
-//    "max_episode_steps": 50, "action_scale_m": 0.05,
+//    "max_episode_steps": 75, "action_scale_m": 0.05,
 //    "arrival_tolerance_m": 0.005, "max_arrival_wait_periods": 0}
 //
 // Every key but base_from_sim may be left out and takes the default below. base_from_sim
@@ -43,7 +43,9 @@ struct GatewayConfig {
   // The lease the gateway asks for: the controller's own dead-man, which holds the arm
   // when targets stop for this long (the protocol's default, 500 ms).
   double lease_timeout_s = 0.5;
-  int max_episode_steps = sim::layout::kEpisodeSteps;         // 50 decisions of the policy
+  // Decisions of the policy per episode: the arm's 75 (sim/world_layout.h), as in the
+  // arm-actuated world, which plays the gateway's episodes step for step.
+  int max_episode_steps = sim::layout::kArmEpisodeSteps;
   double action_scale_m = sim::layout::kActionPositionScale;  // per axis, per step
   // Waiting for the arm. The policy was trained on a mocap hand that reaches each target
   // within one period; a real arm lags (its joints accelerate within their limits). With

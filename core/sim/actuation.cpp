@@ -4,6 +4,7 @@
 
 #include "common/enum_names.h"
 #include "common/error.h"
+#include "sim/world_layout.h"
 
 namespace pnp::sim {
 
@@ -29,6 +30,16 @@ Actuation default_actuation(Robot robot) {
       return Actuation::kMocap;  // (docs/RESULTS.md, "Trained through the arm's controller")
   }
   throw_internal("default_actuation: unknown Robot value");
+}
+
+int episode_steps(Actuation actuation) {
+  switch (actuation) {
+    case Actuation::kMocap:
+      return layout::kEpisodeSteps;
+    case Actuation::kArm:
+      return layout::kArmEpisodeSteps;
+  }
+  throw_internal("episode_steps: unknown Actuation value");
 }
 
 void require_supported(Robot robot, Actuation actuation, std::string_view field) {

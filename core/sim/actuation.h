@@ -35,6 +35,10 @@ Actuation parse_actuation(std::string_view name, std::string_view field = "actua
 // (the Panda's becomes arm once an arm-trained hierarchy holds its results: docs/RESULTS.md).
 Actuation default_actuation(Robot robot);
 
+// The steps of an episode with this actuation: gym's 50 for the mocap hand, the arm's 75
+// (sim/world_layout.h: a hand that accelerates within the Panda's limits needs longer).
+int episode_steps(Actuation actuation);
+
 // INVALID_ARGUMENT naming `field` when `robot` cannot be driven with `actuation` (only
 // the Panda has an arm controller).
 void require_supported(Robot robot, Actuation actuation, std::string_view field = "actuation");

@@ -192,9 +192,10 @@ grpc::Status SimServiceImpl::ComputeReward(grpc::ServerContext*,
 grpc::Status SimServiceImpl::GetEnvSpec(grpc::ServerContext*, const sv1::GetEnvSpecRequest* request,
                                         sv1::GetEnvSpecResponse* response) {
   return guarded([&] {
-    from_proto(request->robot(), "robot");
+    const sim::Robot robot = from_proto(request->robot(), "robot");
     from_proto(request->object(), "object");
     from_proto(request->world(), "world");
+    const sim::Actuation actuation = from_proto(request->actuation(), robot, "actuation");
     const double inf = std::numeric_limits<double>::infinity();
     std::vector<std::string> obs_units;
     for (int k = 0; k < sim::kObservationSize; ++k) {
@@ -209,7 +210,7 @@ grpc::Status SimServiceImpl::GetEnvSpec(grpc::ServerContext*, const sv1::GetEnvS
     fill_spec(*response->mutable_goal(), "goal", sim::kGoalSize, -inf, inf, {"m", "m", "m"});
     fill_spec(*response->mutable_action(), "action", sim::kActionSize, -1, 1,
               {"0.05 m", "0.05 m", "0.05 m", "finger range"});
-    response->set_episode_steps(sim::layout::kEpisodeSteps);
+    response->set_episode_steps(sim::episode_steps(actuation));
     response->set_step_s(sim::layout::kStepDuration_s);
     response->set_success_distance_m(sim::layout::kTaskSuccessDistance);
     return grpc::Status::OK;

@@ -11,6 +11,7 @@
 #include "services/common/server_runtime.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
+#include "sim/world_layout.h"
 
 namespace pnp::services {
 namespace {
@@ -270,6 +271,17 @@ TEST_F(SimServiceTest, ComputeRewardAndSpec) {
   EXPECT_EQ(spec.action().high(0), 1.0);
   EXPECT_EQ(spec.episode_steps(), 50);
   EXPECT_DOUBLE_EQ(spec.step_s(), 0.04);
+
+  // The arm's episode is the arm's; an arm-actuated Fetch is refused naming the field.
+  spec_request.set_actuation(common::v1::ACTUATION_ARM);
+  grpc::ClientContext c4;
+  const grpc::Status fetch_arm = stub_->GetEnvSpec(&c4, spec_request, &spec);
+  EXPECT_EQ(fetch_arm.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(fetch_arm.error_message().find("actuation"), std::string::npos);
+  spec_request.set_robot(common::v1::ROBOT_PANDA);
+  grpc::ClientContext c5;
+  ASSERT_TRUE(stub_->GetEnvSpec(&c5, spec_request, &spec).ok());
+  EXPECT_EQ(spec.episode_steps(), sim::layout::kArmEpisodeSteps);
 }
 
 TEST_F(SimServiceTest, RolloutStreamAnswersEachRequestInOrder) {

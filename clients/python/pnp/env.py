@@ -1,7 +1,8 @@
 """PickAndPlaceEnv: one environment of the simulation service behind the Gymnasium
 goal-environment API (FetchPickAndPlace's): dict observations with `observation`,
 `achieved_goal` and `desired_goal`, a sparse reward by default, `compute_reward` for
-hindsight relabelling, episodes of 50 steps that end truncated, never terminated.
+hindsight relabelling, episodes of 50 steps (75 with actuation="arm") that end truncated,
+never terminated.
 
 Seeding: the environment's episodes come from its seed, episode i of a seed being the
 simulation service's episode (seed, 0, i) -- exactly the episodes `pnpctl evaluate --seed`

@@ -77,7 +77,7 @@ class SimBatch:
         self.idle_timeout_s = idle_timeout_s
         self.client = SimClient(resolve_endpoints(sim_address), timeout_s)
         try:
-            self.spec = self.client.spec(robot, object, world)
+            self.spec = self.client.spec(robot, object, world, actuation)
         except BaseException:
             self.client.close()
             raise

@@ -99,11 +99,13 @@ class SimClient:
                                            goals=[vector3(g) for g in goals])
         return np.array(self._call("ComputeReward", request).rewards, dtype=np.float64)
 
-    def spec(self, robot: str, object: str, world: str) -> sim.GetEnvSpecResponse:
+    def spec(self, robot: str, object: str, world: str,
+             actuation: str = "default") -> sim.GetEnvSpecResponse:
         return self._call("GetEnvSpec", sim.GetEnvSpecRequest(
             robot=names.to_enum(names.ROBOTS, robot, "robot"),
             object=names.to_enum(names.OBJECTS, object, "object"),
-            world=names.to_enum(names.WORLDS, world, "world")))
+            world=names.to_enum(names.WORLDS, world, "world"),
+            actuation=names.to_enum(names.ACTUATIONS, actuation, "actuation")))
 
     def close_env(self, env_id: str) -> None:
         self._call("CloseEnv", sim.CloseEnvRequest(env_id=env_id))

@@ -41,7 +41,7 @@ TEST(GatewayConfig, MissingKeysTakeDefaults) {
   EXPECT_EQ(c.base_frame_id, "panda_link0");
   EXPECT_EQ(c.policy_period_s, 0.04);
   EXPECT_EQ(c.deadman_timeout_s, 0.1);
-  EXPECT_EQ(c.max_episode_steps, 50);
+  EXPECT_EQ(c.max_episode_steps, 75);
   EXPECT_EQ(c.action_scale_m, 0.05);
   EXPECT_EQ(c.arrival_tolerance_m, 0.005);
   EXPECT_EQ(c.max_arrival_wait_periods, 0);
@@ -230,7 +230,7 @@ TEST(GatewayConfig, DeployedConfigLoadsAndMatchesTheSimulatedPanda) {
   EXPECT_GE(c.limits.workspace.min_m.z(), sim::lowest_grip_point_z(c.limits.table_top_z_m));
   EXPECT_EQ(c.lease_timeout_s, GatewayConfig{}.lease_timeout_s);
   EXPECT_EQ(c.policy_period_s, sim::layout::kStepDuration_s);
-  EXPECT_EQ(c.max_episode_steps, sim::layout::kEpisodeSteps);
+  EXPECT_EQ(c.max_episode_steps, sim::layout::kArmEpisodeSteps);
   EXPECT_EQ(c.action_scale_m, sim::layout::kActionPositionScale);
   // The file says what the defaults say: one source of truth for both.
   EXPECT_EQ(c.limits.workspace.min_m, SafetyLimits{}.workspace.min_m);

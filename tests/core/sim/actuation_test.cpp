@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "sim/world_layout.h"
 
 namespace pnp::sim {
 namespace {
@@ -34,6 +35,14 @@ TEST(Actuation, OnlyThePandaHasAnArmControllerAndFetchKeepsGymsMocap) {
               std::string::npos)
         << e.what();
   }
+}
+
+// gym's 50 steps with the mocap hand; the arm, which covers less of each command, gets the
+// arm's episode, the one the robot gateway plays (robot::GatewayConfig).
+TEST(Actuation, TheArmsEpisodeIsLongerThanGyms) {
+  EXPECT_EQ(episode_steps(Actuation::kMocap), 50);
+  EXPECT_EQ(episode_steps(Actuation::kArm), layout::kArmEpisodeSteps);
+  EXPECT_GT(episode_steps(Actuation::kArm), episode_steps(Actuation::kMocap));
 }
 
 }  // namespace
