@@ -70,7 +70,7 @@ double time_env(PickPlaceEnv& env, int episodes, std::uint64_t seed,
                 {},
                 {}};
     }
-    SubtaskSequence sequence;
+    SubtaskSequence sequence(env.episode_steps());
     while (!env.needs_reset()) {
       const Action a = scripted_step_action(sequence, env);
       const Goal g = env.objective_goal(sequence.objective());
@@ -95,7 +95,7 @@ double time_any_env(Environment& env, int episodes, std::uint64_t seed) {
   long long steps = 0;
   for (int e = 0; e < episodes; ++e) {
     env.reset(pnp::derive_seed(seed, static_cast<std::uint64_t>(e)));
-    SubtaskSequence sequence;
+    SubtaskSequence sequence(env.episode_steps());
     while (!env.needs_reset()) {
       const TaskState state = env.task_state();
       const Action a = sequence.idle() ? idle_action() : scripted_action(sequence.current(), state);
@@ -145,12 +145,12 @@ double time_vec_env(VecEnv& vec, int steps_per_env, std::uint64_t seed) {
   std::vector<double> actions(n * kActionSize), goals(n * kGoalSize);
   std::vector<Objective> objectives(n);
   std::vector<StepResult> results(n);
-  std::vector<SubtaskSequence> sequences(n);
+  std::vector<SubtaskSequence> sequences(n, SubtaskSequence(layout::kEpisodeSteps));
   vec.reset(seed);
   double seconds = 0;
   for (int t = 0; t < steps_per_env; ++t) {
     for (std::size_t i = 0; i < n; ++i) {
-      if (vec.env(i).needs_reset()) sequences[i] = {};
+      if (vec.env(i).needs_reset()) sequences[i] = SubtaskSequence(vec.env(i).episode_steps());
       const Action a = scripted_step_action(sequences[i], vec.env(i));
       const Goal g = vec.env(i).objective_goal(sequences[i].objective());
       std::copy(a.data(), a.data() + kActionSize, actions.data() + i * kActionSize);

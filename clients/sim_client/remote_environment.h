@@ -44,6 +44,7 @@ class RemoteEnvironment final : public sim::Environment {
   sim::TaskState task_state() const override;
   int elapsed_steps() const override { return elapsed_steps_; }
   bool needs_reset() const override { return needs_reset_; }
+  int episode_steps() const override { return episode_steps_; }
   const std::string& env_id() const { return env_id_; }
 
  private:

@@ -76,7 +76,7 @@ sim::StepResult ArmActuatedEnv::step(std::span<const double> action, std::span<c
   } else {
     perceive();
     ++elapsed_steps_;
-    needs_reset_ = elapsed_steps_ >= sim::episode_steps(sim::Actuation::kArm);
+    needs_reset_ = elapsed_steps_ >= episode_steps();
   }
   result.observation = observation_;
   sim::score_step(result, task_state(), objective, agent_goal, goal_, needs_reset_);

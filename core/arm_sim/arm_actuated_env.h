@@ -29,6 +29,7 @@
 #include "robot/gateway_config.h"
 #include "robot/perceived_observation.h"
 #include "robot/safety_limits.h"
+#include "sim/actuation.h"
 #include "sim/environment.h"
 
 namespace pnp::arm_sim {
@@ -54,6 +55,7 @@ class ArmActuatedEnv final : public sim::Environment {
   const sim::Goal& episode_goal() const override { return goal_; }
   sim::TaskState task_state() const override;
   int elapsed_steps() const override { return elapsed_steps_; }
+  int episode_steps() const override { return sim::episode_steps(sim::Actuation::kArm); }
   bool needs_reset() const override { return needs_reset_; }
 
   const SimulatedArm& arm() const { return arm_; }

@@ -10,10 +10,13 @@
 namespace pnp::rl {
 
 HierarchyController::HierarchyController(ChoreographerNet choreographer, Experts experts,
-                                         double object_width_m)
+                                         double object_width_m, int episode_steps)
     : net_(std::move(choreographer)),
       experts_(std::move(experts)),
-      object_width_m_(object_width_m) {
+      object_width_m_(object_width_m),
+      caps_{sim::step_cap(sim::Subtask::kApproach, episode_steps),
+            sim::step_cap(sim::Subtask::kManipulate, episode_steps),
+            sim::step_cap(sim::Subtask::kRetract, episode_steps)} {
   for (const auto& e : experts_)
     if (!e) throw_internal("HierarchyController: an expert is missing");
   reset();
@@ -32,7 +35,7 @@ void HierarchyController::reset() {
 
 bool HierarchyController::running_subtask_ended(const sim::TaskState& state) const {
   if (!current_) return true;
-  if (steps_in_subtask_ >= sim::step_cap(*current_)) return true;
+  if (steps_in_subtask_ >= caps_[static_cast<std::size_t>(*current_)]) return true;
   // Against the goal the last step acted on, as the environment judges it.
   return steps_in_subtask_ >= 1 &&
          sim::objective_done_for_goal(sim::objective_of(*current_), state, last_goal_);

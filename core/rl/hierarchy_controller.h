@@ -19,8 +19,11 @@ class HierarchyController {
  public:
   using Experts = std::array<std::unique_ptr<sim::SubtaskPolicy>, sim::kNumSubtasks>;
 
-  // object_width_m: the extent the fingers close on (the grasp predicate needs it).
-  HierarchyController(ChoreographerNet choreographer, Experts experts, double object_width_m);
+  // object_width_m: the extent the fingers close on (the grasp predicate needs it);
+  // episode_steps: the episode the hierarchy plays (Environment::episode_steps, or the
+  // served policy's actuation's), which sets the subtask step caps (sim::step_cap).
+  HierarchyController(ChoreographerNet choreographer, Experts experts, double object_width_m,
+                      int episode_steps);
 
   struct Decision {
     sim::Subtask subtask = sim::Subtask::kApproach;
@@ -43,6 +46,7 @@ class HierarchyController {
   ChoreographerNet net_;
   Experts experts_;
   double object_width_m_;
+  std::array<int, sim::kNumSubtasks> caps_;
   nn::Matrix input_;
   DecisionCache cache_;
   std::optional<sim::Subtask> current_;

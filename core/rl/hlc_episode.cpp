@@ -107,7 +107,7 @@ HlcEpisode run_hlc_episode(sim::Environment& env, ChoreographerNet& net,
                    : choose_subtask(d.probabilities, sample, choice_rng);
     const auto subtask = sim::kAllSubtasks[static_cast<std::size_t>(d.choice)];
     const sim::Objective objective = sim::objective_of(subtask);
-    for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {
+    for (int t = 0; t < sim::step_cap(subtask, env.episode_steps()) && !env.needs_reset(); ++t) {
       const sim::TaskState state = env.task_state();
       const sim::Goal goal = sim::objective_goal(objective, state);
       const sim::Action a =

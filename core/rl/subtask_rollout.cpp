@@ -26,7 +26,7 @@ SubtaskEpisode run_subtask_episode(sim::Environment& env, sim::Subtask subtask,
     if (before == subtask) break;
     sim::SubtaskPolicy& policy = *prefix[static_cast<std::size_t>(before)];
     const sim::Objective objective = sim::objective_of(before);
-    for (int t = 0; t < sim::step_cap(before) && !env.needs_reset(); ++t) {
+    for (int t = 0; t < sim::step_cap(before, env.episode_steps()) && !env.needs_reset(); ++t) {
       const sim::TaskState state = env.task_state();
       const sim::Goal goal = sim::objective_goal(objective, state);
       const auto r = env.step(policy.act(before, env.observation(), goal, state), goal, objective);
@@ -36,7 +36,7 @@ SubtaskEpisode run_subtask_episode(sim::Environment& env, sim::Subtask subtask,
   }
   out.env_steps = out.prefix_steps;
   const sim::Objective objective = sim::objective_of(subtask);
-  for (int t = 0; t < sim::step_cap(subtask) && !env.needs_reset(); ++t) {
+  for (int t = 0; t < sim::step_cap(subtask, env.episode_steps()) && !env.needs_reset(); ++t) {
     const sim::TaskState state = env.task_state();
     const sim::Goal goal = sim::objective_goal(objective, state);
     const sim::Observation observation = env.observation();

@@ -128,8 +128,10 @@ std::unique_ptr<PolicyController> ServedHierarchy::make_controller() const {
         std::make_unique<BatchedExpert>(batchers_[k], rl::scripted_gripper_of(experts_[k].meta));
   }
   return std::make_unique<HierarchyPolicyController>(
+      // Subtask caps for the episode the policy was trained in (its actuation's).
       std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
-                                                2 * sim::object_spec(object_).half_width_m),
+                                                2 * sim::object_spec(object_).half_width_m,
+                                                sim::episode_steps(actuation_)),
       ids_);
 }
 

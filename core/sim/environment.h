@@ -74,6 +74,9 @@ class Environment {
   virtual TaskState task_state() const = 0;
   virtual int elapsed_steps() const = 0;
   virtual bool needs_reset() const = 0;
+  // The steps of an episode: sim::episode_steps of the environment's actuation (gym's 50
+  // with the mocap hand, the arm's 75). Subtask step caps scale with it (sim::step_cap).
+  virtual int episode_steps() const = 0;
 
  protected:
   Environment() = default;

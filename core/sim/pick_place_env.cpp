@@ -148,7 +148,7 @@ StepResult PickPlaceEnv::step(std::span<const double> action, std::span<const do
   } else {
     update_observation();
     ++elapsed_steps_;
-    needs_reset_ = elapsed_steps_ >= layout::kEpisodeSteps;
+    needs_reset_ = elapsed_steps_ >= episode_steps();
   }
   result.observation = observation_;
   score_step(result, task_state(), objective, agent_goal, episode_goal_, needs_reset_);

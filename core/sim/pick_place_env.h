@@ -25,6 +25,7 @@
 #include "sim/mujoco_data.h"
 #include "sim/observation.h"
 #include "sim/subtask.h"
+#include "sim/world_layout.h"
 #include "sim/world_model.h"
 
 namespace pnp::sim {
@@ -48,6 +49,7 @@ class PickPlaceEnv final : public Environment {
   TaskState task_state() const override;
   Eigen::Vector3d objective_goal(Objective objective) const;
   int elapsed_steps() const override { return elapsed_steps_; }
+  int episode_steps() const override { return layout::kEpisodeSteps; }
   bool needs_reset() const override { return needs_reset_; }
   const WorldModel& world() const { return *world_; }
 

@@ -9,7 +9,7 @@ EpisodeOutcome run_pipeline_episode(Environment& env, const SubtaskPolicies& pol
                                     std::uint64_t seed, const PipelineStepObserver& observer) {
   EpisodeOutcome out;
   env.reset(seed);
-  SubtaskSequence sequence;
+  SubtaskSequence sequence(env.episode_steps());
   StepResult last;
   while (!env.needs_reset()) {
     const Objective objective = sequence.objective();

@@ -1,5 +1,6 @@
 #include "sim/subtask.h"
 
+#include <algorithm>
 #include <string>
 
 #include "common/enum_names.h"
@@ -97,16 +98,23 @@ bool objective_done(Objective objective, const TaskState& s) {
   return objective_done_for_goal(objective, s, objective_goal(objective, s));
 }
 
-int step_cap(Subtask subtask) {
-  switch (subtask) {
-    case Subtask::kApproach:
-      return thresholds::kApproachStepCap;
-    case Subtask::kManipulate:
-      return thresholds::kManipulateStepCap;
-    case Subtask::kRetract:
-      return thresholds::kRetractStepCap;
+int step_cap(Subtask subtask, int episode_steps) {
+  if (episode_steps <= 0) {
+    throw_invalid_argument("episode_steps", "a positive number of steps",
+                           std::to_string(episode_steps));
   }
-  throw_internal("step_cap: unknown Subtask value");
+  const int gym_cap = [subtask] {
+    switch (subtask) {
+      case Subtask::kApproach:
+        return thresholds::kApproachStepCap;
+      case Subtask::kManipulate:
+        return thresholds::kManipulateStepCap;
+      case Subtask::kRetract:
+        return thresholds::kRetractStepCap;
+    }
+    throw_internal("step_cap: unknown Subtask value");
+  }();
+  return std::max(1, gym_cap * episode_steps / layout::kEpisodeSteps);
 }
 
 double compute_reward(const Eigen::Vector3d& achieved, const Eigen::Vector3d& goal) {

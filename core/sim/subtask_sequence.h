@@ -5,12 +5,20 @@
 // the scripted pipeline, the environment benchmark and the tests, so the rule is written
 // once.
 
+#include <array>
+
 #include "sim/subtask.h"
 
 namespace pnp::sim {
 
 class SubtaskSequence {
  public:
+  // Caps as step_cap gives them for an episode of `episode_steps` (Environment::episode_steps).
+  explicit SubtaskSequence(int episode_steps)
+      : caps_{step_cap(Subtask::kApproach, episode_steps),
+              step_cap(Subtask::kManipulate, episode_steps),
+              step_cap(Subtask::kRetract, episode_steps)} {}
+
   bool idle() const { return stage_ >= kNumSubtasks; }
   Subtask current() const { return kAllSubtasks[static_cast<std::size_t>(stage_)]; }  // not idle
   // What the step is scored against: the current subtask, or the whole task when idle.
@@ -21,13 +29,14 @@ class SubtaskSequence {
   bool record_step(bool objective_done) {
     if (idle()) return false;
     ++steps_in_stage_;
-    if (!objective_done && steps_in_stage_ < step_cap(current())) return false;
+    if (!objective_done && steps_in_stage_ < caps_[static_cast<std::size_t>(stage_)]) return false;
     ++stage_;
     steps_in_stage_ = 0;
     return true;
   }
 
  private:
+  std::array<int, kNumSubtasks> caps_;
   int stage_ = 0;
   int steps_in_stage_ = 0;
 };

@@ -11,7 +11,11 @@
 
 #include "arm_sim/arm_env_factory.h"
 #include "common/error.h"
+#include "common/rng.h"
 #include "sim/pick_place_env.h"
+#include "sim/scripted_expert.h"
+#include "sim/scripted_pipeline.h"
+#include "sim/subtask.h"
 #include "sim/world_layout.h"
 #include "sim/world_model.h"
 
@@ -154,6 +158,25 @@ TEST(ArmActuatedEnv, ADiveIntoTheTableStopsAtTheWorkspaceFloor) {
   EXPECT_EQ(r.fault, sim::PhysicsFault::kNone);
   EXPECT_GT(lowest, sim::layout::kTableTop_z);
   EXPECT_LT(lowest, sim::layout::kTableTop_z + 0.03);  // it does get down to the object
+}
+
+// The arm closes the Franka Hand slower than the mocap world's fingers: a scripted
+// manipulate on the cylinder needs more than gym's 15 steps, and gets the arm's longer cap.
+TEST(ArmActuatedEnv, ManipulateGetsTheArmsLongerStepCap) {
+  ArmActuatedEnv env(
+      sim::WorldModel::load(Robot::kPanda, ObjectShape::kCylinder, WorldProfile::kGym));
+  sim::ScriptedPolicy scripted;
+  const sim::SubtaskPolicies experts{&scripted, &scripted, &scripted};
+  const int cap = sim::step_cap(sim::Subtask::kManipulate, env.episode_steps());
+  ASSERT_GT(cap, sim::thresholds::kManipulateStepCap);
+  int longest = 0;
+  for (std::uint64_t i = 0; i < 8; ++i) {
+    const sim::EpisodeOutcome o = sim::run_pipeline_episode(env, experts, derive_seed(0, i));
+    longest =
+        std::max(longest, o.subtask_steps[static_cast<std::size_t>(sim::Subtask::kManipulate)]);
+  }
+  EXPECT_GT(longest, sim::thresholds::kManipulateStepCap);
+  EXPECT_LE(longest, cap);
 }
 
 TEST(ArmEnvFactory, MakesArmActuatedPandaWorldsAndRefusesFetchNamingActuation) {

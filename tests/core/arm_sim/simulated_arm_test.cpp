@@ -367,7 +367,7 @@ TransferOutcome run_transfer_episode(SimulatedArm& arm, std::uint64_t seed) {
     return sim::TaskState{a.tcp_world.position_m, a.object_world.position_m, a.finger_gap_m,
                           episode.goal_world, object_width};
   };
-  sim::SubtaskSequence sequence;
+  sim::SubtaskSequence sequence(sim::layout::kEpisodeSteps);
   for (int cycle = 0; cycle < sim::layout::kEpisodeSteps; ++cycle) {
     const sim::Action action =
         (sequence.idle() ? sim::idle_action()

@@ -7,6 +7,7 @@
 #include "rl/hlc_episode.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
+#include "sim/world_layout.h"
 
 namespace pnp::rl {
 namespace {
@@ -28,7 +29,7 @@ TEST(HierarchyController, StepByStepEqualsTheGreedyEpisode) {
     Rng init(init_seed);
     net.initialise(init);
     sim::ScriptedPolicy scripted;
-    HierarchyController controller(net, scripted_experts(), width);
+    HierarchyController controller(net, scripted_experts(), width, sim::layout::kEpisodeSteps);
     for (std::uint64_t episode = 0; episode < 4; ++episode) {
       const std::uint64_t seed = derive_seed(init_seed * 100, episode);
       sim::PickPlaceEnv reference_env(world);
@@ -60,7 +61,7 @@ TEST(HierarchyController, RefusesANonFiniteObservationNamingIt) {
   ChoreographerNet net({{8}, 4});
   Rng init(0);
   net.initialise(init);
-  HierarchyController controller(net, scripted_experts(), 0.05);
+  HierarchyController controller(net, scripted_experts(), 0.05, sim::layout::kEpisodeSteps);
   sim::Observation o = sim::Observation::Zero();
   o(4) = std::numeric_limits<double>::quiet_NaN();
   try {

@@ -39,7 +39,7 @@ std::shared_ptr<const sim::WorldModel> fetch_block() {
 // Runs the scripted expert of `subtask` until its predicate holds or its step cap.
 void run_scripted_to_predicate(sim::PickPlaceEnv& env, sim::Subtask subtask) {
   const sim::Objective objective = sim::objective_of(subtask);
-  for (int t = 0; t < sim::step_cap(subtask); ++t) {
+  for (int t = 0; t < sim::step_cap(subtask, env.episode_steps()); ++t) {
     const sim::TaskState s = env.task_state();
     if (sim::objective_done(objective, s)) return;
     env.step(sim::scripted_action(subtask, s), sim::objective_goal(objective, s), objective);
@@ -70,6 +70,7 @@ class FaultAtStep final : public sim::Environment {
   sim::TaskState task_state() const override { return env_.task_state(); }
   int elapsed_steps() const override { return env_.elapsed_steps(); }
   bool needs_reset() const override { return env_.needs_reset(); }
+  int episode_steps() const override { return env_.episode_steps(); }
 
  private:
   sim::PickPlaceEnv env_;
@@ -143,7 +144,7 @@ TEST(SubtaskRollout, ThePrefixDecidesWhereTheExpertStarts) {
       env, sim::Subtask::kManipulate, {&scripted, &scripted, &scripted}, scripted, nullptr, 9, rng);
   const auto after_idle = run_subtask_episode(
       env, sim::Subtask::kManipulate, {&idle, &scripted, &scripted}, scripted, nullptr, 9, rng);
-  EXPECT_EQ(after_idle.prefix_steps, sim::step_cap(sim::Subtask::kApproach))
+  EXPECT_EQ(after_idle.prefix_steps, sim::step_cap(sim::Subtask::kApproach, env.episode_steps()))
       << "an approach that never arrives runs to its cap";
   EXPECT_LT(after_scripted.prefix_steps, after_idle.prefix_steps);
   EXPECT_FALSE(

@@ -18,7 +18,7 @@ namespace {
 std::vector<double> trajectory(PickPlaceEnv& env, std::uint64_t seed) {
   std::vector<double> out;
   env.reset(seed);
-  SubtaskSequence sequence;
+  SubtaskSequence sequence(layout::kEpisodeSteps);
   while (!env.needs_reset()) {
     const Objective objective = sequence.objective();
     const Action a =

@@ -34,7 +34,7 @@ TEST(ScriptedPipeline, SubtasksRunInOrderWithinTheirCaps) {
     const auto k = static_cast<std::size_t>(s);
     EXPECT_TRUE(out.subtask_done[k]) << subtask_name(s);
     EXPECT_GT(out.subtask_steps[k], 0);
-    EXPECT_LE(out.subtask_steps[k], step_cap(s));
+    EXPECT_LE(out.subtask_steps[k], step_cap(s, env.episode_steps()));
   }
   EXPECT_EQ(out.active_steps, out.subtask_steps[0] + out.subtask_steps[1] + out.subtask_steps[2]);
   EXPECT_LT(out.final_distance_m, 0.05);

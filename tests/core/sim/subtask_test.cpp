@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "sim/scripted_expert.h"
 #include "sim/subtask_sequence.h"
+#include "sim/world_layout.h"
 
 namespace pnp::sim {
 namespace {
@@ -80,10 +81,22 @@ TEST(Retract, ADroppedObjectAtTheGoalIsNotDone) {
   EXPECT_TRUE(objective_done(Objective::kRetract, s));
 }
 
-TEST(StepCaps, DefinedOncePerSubtask) {
-  EXPECT_EQ(step_cap(Subtask::kApproach), thresholds::kApproachStepCap);
-  EXPECT_EQ(step_cap(Subtask::kManipulate), thresholds::kManipulateStepCap);
-  EXPECT_EQ(step_cap(Subtask::kRetract), thresholds::kRetractStepCap);
+TEST(StepCaps, DefinedOncePerSubtaskAndScaledWithTheEpisode) {
+  EXPECT_EQ(step_cap(Subtask::kApproach, 50), thresholds::kApproachStepCap);
+  EXPECT_EQ(step_cap(Subtask::kManipulate, 50), thresholds::kManipulateStepCap);
+  EXPECT_EQ(step_cap(Subtask::kRetract, 50), thresholds::kRetractStepCap);
+  // The arm's 75 steps: half as long again, rounded down; retract keeps the rest.
+  EXPECT_EQ(step_cap(Subtask::kApproach, 75), 30);
+  EXPECT_EQ(step_cap(Subtask::kManipulate, 75), 22);
+  EXPECT_EQ(step_cap(Subtask::kRetract, 75), 75);
+  EXPECT_EQ(step_cap(Subtask::kManipulate, 1), 1) << "a cap is at least one step";
+  try {
+    step_cap(Subtask::kApproach, 0);
+    FAIL() << "an empty episode got a cap";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("episode_steps"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Names, ParseRefusesUnknownNamesNamingTheField) {
@@ -135,7 +148,7 @@ namespace pnp::sim {
 namespace {
 
 TEST(SubtaskSequence, AdvancesOnThePredicateOrTheCapThenIdles) {
-  SubtaskSequence s;
+  SubtaskSequence s(layout::kEpisodeSteps);
   EXPECT_EQ(s.current(), Subtask::kApproach);
   EXPECT_FALSE(s.record_step(false));
   EXPECT_TRUE(s.record_step(true));  // predicate fired
@@ -147,6 +160,16 @@ TEST(SubtaskSequence, AdvancesOnThePredicateOrTheCapThenIdles) {
   EXPECT_TRUE(s.idle());
   EXPECT_EQ(s.objective(), Objective::kTask);
   EXPECT_FALSE(s.record_step(true)) << "idle: nothing left to end";
+}
+
+TEST(SubtaskSequence, TheArmsLongerEpisodeGivesManipulateItsLongerCap) {
+  SubtaskSequence s(layout::kArmEpisodeSteps);
+  EXPECT_TRUE(s.record_step(true));  // approach
+  const int cap = step_cap(Subtask::kManipulate, layout::kArmEpisodeSteps);
+  ASSERT_GT(cap, thresholds::kManipulateStepCap);
+  for (int t = 1; t < cap; ++t) EXPECT_FALSE(s.record_step(false)) << t;
+  EXPECT_TRUE(s.record_step(false));
+  EXPECT_EQ(s.current(), Subtask::kRetract);
 }
 
 }  // namespace
