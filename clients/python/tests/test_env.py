@@ -224,9 +224,10 @@ def test_the_arm_actuated_panda_lags_the_mocap_hand_on_the_same_episode(sim_serv
     the same episode (object, goal) as the mocap world's for the seed, the hand slower."""
     up = np.array([0.0, 0.0, 1.0, 0.0])
     rises = {}
-    for actuation in ("mocap", "arm"):
+    for actuation, episode_steps in (("mocap", 50), ("arm", 75)):
         with pnp.PickAndPlaceEnv(sim_server.address, robot="panda", seed=7,
                                  actuation=actuation) as e:
+            assert e.max_episode_steps == episode_steps  # the arm's episode is longer
             obs, _ = e.reset()
             start = obs["observation"][2]
             after, _, _, _, _ = e.step(up)
