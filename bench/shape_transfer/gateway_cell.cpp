@@ -112,9 +112,9 @@ std::uint64_t play_segment(const GatewayCellSpec& spec, policy::v1::PolicyServic
 }
 
 // The same scenes in the arm-actuated world (what training evaluates on), with the same
-// served policy: the world's success at step 50, and at any step (the gateway stops at the
-// first success, so this is what it should report), and the scenes where the gateway and
-// the world disagree.
+// served policy: the world's success at the episode's end, and at any step (the gateway stops at
+// the first success, so this is what it should report), and the scenes where the gateway and the
+// world disagree.
 nlohmann::json play_arm_world(const GatewayCellSpec& spec, const std::string& db,
                               serving::PolicyKind kind,
                               const std::vector<gateway::EpisodeReport>& gateway) {
@@ -131,7 +131,7 @@ nlohmann::json play_arm_world(const GatewayCellSpec& spec, const std::string& db
   int at_end = 0, any_step = 0;
   nlohmann::json disagreements = nlohmann::json::array();
   for (const gateway::EpisodeReport& report : gateway) {
-    const serving::ServedPolicy::Lease controller = served->acquire();
+    const serving::ServedPolicy::Lease controller = served->acquire(env.episode_steps());
     sim::StepResult step;
     step.observation = env.reset(report.seed);
     bool reached = sim::is_task_success(sim::object_position(step.observation), env.episode_goal());
@@ -150,7 +150,7 @@ nlohmann::json play_arm_world(const GatewayCellSpec& spec, const std::string& db
     }
   }
   const double n = gateway.empty() ? 1.0 : static_cast<double>(gateway.size());
-  return {{"success_at_step_50", at_end / n},
+  return {{"success_at_episode_end", at_end / n},
           {"success_any_step", any_step / n},
           {"disagreements_with_gateway", disagreements}};
 }

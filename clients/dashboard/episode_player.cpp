@@ -68,7 +68,8 @@ class EnvLease {
 };
 
 plot::EpisodeTrace play_one(sv1::SimulationService::Stub& sim, pv1::PolicyService::Stub& policy,
-                            const std::string& env_id, const std::string& title) {
+                            const std::string& env_id, int episode_steps,
+                            const std::string& title) {
   sv1::ResetRequest reset;
   reset.set_env_id(env_id);
   sv1::ResetResponse reset_response;
@@ -81,7 +82,7 @@ plot::EpisodeTrace play_one(sv1::SimulationService::Stub& sim, pv1::PolicyServic
   trace.success_radius_m = sim::layout::kTaskSuccessDistance;
   trace.table_top_z = sim::layout::kTableTop_z;
   trace.frames.push_back(frame_of(state, -1));
-  // A whole episode is 50 answers: a hung inference service frees this worker after a
+  // A whole episode is 50 or 75 answers: a hung inference service frees this worker after a
   // minute instead of holding it forever.
   grpc::ClientContext session_context;
   session_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
@@ -90,6 +91,7 @@ plot::EpisodeTrace play_one(sv1::SimulationService::Stub& sim, pv1::PolicyServic
     pv1::PredictSessionRequest ask;
     *ask.mutable_observation() = state.observation();
     *ask.mutable_goal() = state.episode_goal();
+    ask.set_episode_steps(episode_steps);
     pv1::PredictSessionResponse answer;
     if (!session->Write(ask) || !session->Read(&answer)) break;
     sv1::StepRequest step;
@@ -167,7 +169,7 @@ PlayedEpisodes EpisodePlayer::play(int count, std::uint64_t seed) {
   const EnvLease env(*sim, created.env_id());
   for (int i = 0; i < count; ++i) {
     out.episodes.push_back(
-        play_one(*sim, *policy, env.id(),
+        play_one(*sim, *policy, env.id(), created.episode_steps(),
                  "episode " + std::to_string(i) + " of seed " + std::to_string(seed)));
     out.successes += out.episodes.back().success ? 1 : 0;
   }

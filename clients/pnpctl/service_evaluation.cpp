@@ -34,7 +34,7 @@ struct EpisodeOutcome {
 // next action and step the environment with it, until the episode is over.
 EpisodeOutcome run_episode(sim::v1::SimulationService::Stub& sim,
                            policy::v1::PolicyService::Stub& policy, const Endpoints& endpoints,
-                           const std::string& env_id) {
+                           const std::string& env_id, int episode_steps) {
   sim::v1::ResetRequest reset;
   reset.set_env_id(env_id);
   sim::v1::ResetResponse reset_response;
@@ -48,6 +48,7 @@ EpisodeOutcome run_episode(sim::v1::SimulationService::Stub& sim,
     policy::v1::PredictSessionRequest ask;
     *ask.mutable_observation() = state.observation();
     *ask.mutable_goal() = state.episode_goal();
+    ask.set_episode_steps(episode_steps);
     policy::v1::PredictSessionResponse answer;
     if (!session->Write(ask) || !session->Read(&answer)) break;
     if (answer.decided()) out.choices += subtask_letter(answer.prediction().subtask());
@@ -119,7 +120,8 @@ ServiceEvaluation evaluate_through_services(const Endpoints& endpoints, const Se
   ServiceEvaluation out;
   std::map<std::string, int> sequences;
   for (int i = 0; i < episodes; ++i) {
-    const EpisodeOutcome e = run_episode(*sim, *policy, endpoints, env.id());
+    const EpisodeOutcome e =
+        run_episode(*sim, *policy, endpoints, env.id(), created.episode_steps());
     ++out.episodes;
     out.successes += e.success ? 1 : 0;
     out.env_steps += e.steps;

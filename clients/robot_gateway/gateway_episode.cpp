@@ -113,10 +113,10 @@ bool ends_run(EpisodeEnd end) {
 // Everything one episode keeps between its cycles.
 struct GatewayEpisodeRunner::Episode {
   Episode(const EpisodeOptions& o, const std::atomic<bool>& i, policy::v1::PolicyService::Stub& p,
-          sim::WorldProfile w)
+          int max_steps, sim::WorldProfile w)
       : options(o),
         interrupted(i),
-        session(p),
+        session(p, max_steps),
         world(w),
         world_parameters(sim::world_parameters(w)) {}
 
@@ -201,7 +201,7 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
     if (e.code() != ErrorCode::kCancelled && !interrupted.load()) throw;
     interrupted_early = std::string("interrupted: ") + e.what();
   }
-  Episode episode(options, interrupted, policy_, world);
+  Episode episode(options, interrupted, policy_, config_.max_episode_steps, world);
   episode.report.seed = options.seed;
   if (interrupted_early) episode.end(EpisodeEnd::kInterrupted, *interrupted_early);
   try {

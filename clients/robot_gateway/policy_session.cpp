@@ -4,8 +4,9 @@
 
 namespace pnp::gateway {
 
-PolicySession::PolicySession(policy::v1::PolicyService::Stub& stub)
+PolicySession::PolicySession(policy::v1::PolicyService::Stub& stub, int episode_steps)
     : stream_(stub.PredictSession(&context_)) {
+  request_.set_episode_steps(episode_steps);
   answers_.emplace([this](policy::v1::PredictSessionResponse& m) { return stream_->Read(&m); });
 }
 

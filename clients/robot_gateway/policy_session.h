@@ -24,7 +24,9 @@ struct Prediction {
 
 class PolicySession {
  public:
-  explicit PolicySession(policy::v1::PolicyService::Stub& stub);
+  // episode_steps: how long the episode lasts, declared to the policy (its subtask caps
+  // scale to it).
+  PolicySession(policy::v1::PolicyService::Stub& stub, int episode_steps);
   ~PolicySession();  // cancels the stream if still open
   PolicySession(const PolicySession&) = delete;
   PolicySession& operator=(const PolicySession&) = delete;

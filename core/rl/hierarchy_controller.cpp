@@ -14,11 +14,16 @@ HierarchyController::HierarchyController(ChoreographerNet choreographer, Experts
     : net_(std::move(choreographer)),
       experts_(std::move(experts)),
       object_width_m_(object_width_m),
-      caps_{sim::step_cap(sim::Subtask::kApproach, episode_steps),
-            sim::step_cap(sim::Subtask::kManipulate, episode_steps),
-            sim::step_cap(sim::Subtask::kRetract, episode_steps)} {
+      episode_steps_(episode_steps),
+      caps_(sim::step_caps(episode_steps)) {
   for (const auto& e : experts_)
     if (!e) throw_internal("HierarchyController: an expert is missing");
+  reset();
+}
+
+void HierarchyController::reset(int episode_steps) {
+  caps_ = sim::step_caps(episode_steps);
+  episode_steps_ = episode_steps;
   reset();
 }
 

@@ -34,11 +34,15 @@ class HierarchyController {
     bool placed = false;   // retract has placed the object: hold still
   };
 
-  void reset();  // a new episode
+  void reset();  // a new episode as long as the last
+  // A new episode of `episode_steps` steps: the subtask caps scale to it (a mocap-trained
+  // hierarchy played on the arm's 75-step episode gets the arm's caps).
+  void reset(int episode_steps);
   // The action for the state after the previous action. Throws INVALID_ARGUMENT for a
   // non-finite observation or goal (naming it).
   Decision act(const sim::Observation& observation, const sim::Goal& episode_goal);
   int steps() const { return steps_; }
+  int episode_steps() const { return episode_steps_; }
 
  private:
   bool running_subtask_ended(const sim::TaskState& state) const;
@@ -46,7 +50,8 @@ class HierarchyController {
   ChoreographerNet net_;
   Experts experts_;
   double object_width_m_;
-  std::array<int, sim::kNumSubtasks> caps_;
+  int episode_steps_;
+  sim::StepCaps caps_;
   nn::Matrix input_;
   DecisionCache cache_;
   std::optional<sim::Subtask> current_;

@@ -129,7 +129,11 @@ void GatewayConfig::validate() const {
         fmt::format("more than deadman_timeout_s ({} s) and at most 10 s", deadman_timeout_s),
         fmt::format("{}", lease_timeout_s));
   }
-  require_positive(max_episode_steps, "max_episode_steps");
+  if (max_episode_steps <= 0 || max_episode_steps > sim::layout::kMaxEpisodeSteps) {
+    throw_invalid_argument("max_episode_steps",
+                           fmt::format("1 to {} steps", sim::layout::kMaxEpisodeSteps),
+                           std::to_string(max_episode_steps));
+  }
   require_positive_finite(action_scale_m, "action_scale_m", "m");
   if (action_scale_m > limits.max_step_m) {
     throw_invalid_argument(

@@ -21,7 +21,11 @@ class EndToEndController final : public PolicyController {
         object_width_m_(object_width_m),
         checkpoint_id_(checkpoint_id) {}
 
-  void reset() override { steps_ = 0; }
+  // No subtasks to cap: the length is only reported back.
+  void reset(int episode_steps) override {
+    steps_ = 0;
+    episode_steps_ = episode_steps;
+  }
 
   Decision act(const sim::Observation& observation, const sim::Goal& episode_goal) override {
     require_finite_vector({observation.data(), sim::kObservationSize}, sim::kObservationSize,
@@ -36,12 +40,14 @@ class EndToEndController final : public PolicyController {
   }
 
   int steps() const override { return steps_; }
+  int episode_steps() const override { return episode_steps_; }
 
  private:
   BatchedExpert actor_;
   double object_width_m_;
   std::int64_t checkpoint_id_;
   int steps_ = 0;
+  int episode_steps_ = 0;
 };
 
 }  // namespace

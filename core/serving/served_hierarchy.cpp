@@ -16,7 +16,7 @@ class HierarchyPolicyController final : public PolicyController {
   HierarchyPolicyController(std::unique_ptr<rl::HierarchyController> controller, ServedIds ids)
       : controller_(std::move(controller)), ids_(ids) {}
 
-  void reset() override { controller_->reset(); }
+  void reset(int episode_steps) override { controller_->reset(episode_steps); }
 
   Decision act(const sim::Observation& observation, const sim::Goal& episode_goal) override {
     const rl::HierarchyController::Decision h = controller_->act(observation, episode_goal);
@@ -33,6 +33,7 @@ class HierarchyPolicyController final : public PolicyController {
   }
 
   int steps() const override { return controller_->steps(); }
+  int episode_steps() const override { return controller_->episode_steps(); }
 
  private:
   std::unique_ptr<rl::HierarchyController> controller_;
@@ -128,7 +129,7 @@ std::unique_ptr<PolicyController> ServedHierarchy::make_controller() const {
         std::make_unique<BatchedExpert>(batchers_[k], rl::scripted_gripper_of(experts_[k].meta));
   }
   return std::make_unique<HierarchyPolicyController>(
-      // Subtask caps for the episode the policy was trained in (its actuation's).
+      // Caps for the episode the policy was trained in; acquire() resets them to the client's.
       std::make_unique<rl::HierarchyController>(choreographer_.net, std::move(experts),
                                                 2 * sim::object_spec(object_).half_width_m,
                                                 sim::episode_steps(actuation_)),

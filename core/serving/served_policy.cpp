@@ -3,6 +3,7 @@
 #include "common/error.h"
 #include "serving/served_end_to_end.h"
 #include "serving/served_hierarchy.h"
+#include "sim/world_layout.h"
 
 namespace pnp::serving {
 
@@ -26,7 +27,12 @@ std::vector<std::string> batched_actors(PolicyKind kind) {
   return {"approach", "manipulate", "retract"};
 }
 
-ServedPolicy::Lease ServedPolicy::acquire() const {
+ServedPolicy::Lease ServedPolicy::acquire(int episode_steps) const {
+  if (episode_steps < 0 || episode_steps > sim::layout::kMaxEpisodeSteps) {
+    throw_invalid_argument(
+        "episode_steps", "0 (the policy's own) to " + std::to_string(sim::layout::kMaxEpisodeSteps),
+        std::to_string(episode_steps));
+  }
   std::unique_ptr<PolicyController> controller;
   {
     std::lock_guard lock(pool_mutex_);
@@ -36,7 +42,7 @@ ServedPolicy::Lease ServedPolicy::acquire() const {
     }
   }
   if (!controller) controller = make_controller();
-  controller->reset();
+  controller->reset(episode_steps > 0 ? episode_steps : sim::episode_steps(actuation()));
   return Lease(shared_from_this(), std::move(controller));
 }
 

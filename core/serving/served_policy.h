@@ -59,11 +59,14 @@ struct Decision {
 class PolicyController {
  public:
   virtual ~PolicyController() = default;
-  virtual void reset() = 0;  // a new episode
+  // A new episode of `episode_steps` steps (positive): the hierarchy's subtask caps scale
+  // to it (sim::step_caps); the end-to-end policy has none.
+  virtual void reset(int episode_steps) = 0;
   // The action for the state after the previous action, given the episode goal. Throws
   // INVALID_ARGUMENT for a non-finite observation or goal (naming it).
   virtual Decision act(const sim::Observation& observation, const sim::Goal& episode_goal) = 0;
-  virtual int steps() const = 0;  // answered since reset, this one included
+  virtual int steps() const = 0;          // answered since reset, this one included
+  virtual int episode_steps() const = 0;  // as the last reset declared
 };
 
 class ServedPolicy : public std::enable_shared_from_this<ServedPolicy> {
@@ -86,8 +89,10 @@ class ServedPolicy : public std::enable_shared_from_this<ServedPolicy> {
     std::unique_ptr<PolicyController> controller_;
   };
 
-  // A controller reset to the start of an episode. Thread-safe.
-  Lease acquire() const;
+  // A controller reset to the start of an episode of `episode_steps` steps; 0: the episode
+  // of the policy's actuation (sim::episode_steps: 50 on the mocap hand, 75 on the arm).
+  // INVALID_ARGUMENT naming episode_steps outside 0..layout::kMaxEpisodeSteps. Thread-safe.
+  Lease acquire(int episode_steps = 0) const;
 
   virtual PolicyKind kind() const = 0;
   // The checkpoints served, one per served_roles(kind()) entry, in that order.

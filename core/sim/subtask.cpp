@@ -117,6 +117,14 @@ int step_cap(Subtask subtask, int episode_steps) {
   return std::max(1, gym_cap * episode_steps / layout::kEpisodeSteps);
 }
 
+StepCaps step_caps(int episode_steps) {
+  StepCaps caps{};
+  for (Subtask subtask : kAllSubtasks) {
+    caps[static_cast<std::size_t>(subtask)] = step_cap(subtask, episode_steps);
+  }
+  return caps;
+}
+
 double compute_reward(const Eigen::Vector3d& achieved, const Eigen::Vector3d& goal) {
   return -(achieved - goal).norm();
 }

@@ -79,6 +79,9 @@ bool objective_done_for_goal(Objective objective, const TaskState& s, const Eige
 // the Franka Hand had closed on the cylinder (scripted: 0.84 of 300, 0.98 at 20 steps).
 // INVALID_ARGUMENT unless episode_steps is positive.
 int step_cap(Subtask subtask, int episode_steps);
+// All three caps, indexed by Subtask: what a sequencer of the subtasks keeps.
+using StepCaps = std::array<int, kNumSubtasks>;
+StepCaps step_caps(int episode_steps);
 
 // The object is grasped: gripper centred on it and the pads closed onto its sides.
 bool is_grasped(const TaskState& s);

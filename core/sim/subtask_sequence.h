@@ -5,19 +5,14 @@
 // the scripted pipeline, the environment benchmark and the tests, so the rule is written
 // once.
 
-#include <array>
-
 #include "sim/subtask.h"
 
 namespace pnp::sim {
 
 class SubtaskSequence {
  public:
-  // Caps as step_cap gives them for an episode of `episode_steps` (Environment::episode_steps).
-  explicit SubtaskSequence(int episode_steps)
-      : caps_{step_cap(Subtask::kApproach, episode_steps),
-              step_cap(Subtask::kManipulate, episode_steps),
-              step_cap(Subtask::kRetract, episode_steps)} {}
+  // Caps as step_caps gives them for an episode of `episode_steps` (Environment::episode_steps).
+  explicit SubtaskSequence(int episode_steps) : caps_(step_caps(episode_steps)) {}
 
   bool idle() const { return stage_ >= kNumSubtasks; }
   Subtask current() const { return kAllSubtasks[static_cast<std::size_t>(stage_)]; }  // not idle
@@ -36,7 +31,7 @@ class SubtaskSequence {
   }
 
  private:
-  std::array<int, kNumSubtasks> caps_;
+  StepCaps caps_;
   int stage_ = 0;
   int steps_in_stage_ = 0;
 };

@@ -19,6 +19,9 @@ inline constexpr int kEpisodeSteps = 50;
 // episodes in 50 steps (every failure a retract still on its way up) and 1.000 in 75
 // (docs/SIMULATION.md, "The arm's episode").
 inline constexpr int kArmEpisodeSteps = 75;
+// The longest episode a client may declare (the gateway's max_episode_steps, a policy
+// session's episode_steps): 400 s at 25 Hz, far past any pick and place.
+inline constexpr int kMaxEpisodeSteps = 10000;
 
 // Table: a box whose top surface is at kTableTop_z.
 inline constexpr double kTableCenter_x = 1.30;

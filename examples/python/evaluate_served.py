@@ -38,7 +38,8 @@ def play(env: pnp.PickAndPlaceEnv, platform: pnp.Platform) -> tuple[bool, int, s
     """One episode: (success, steps, the subtasks the choreographer chose, as letters)."""
     obs, _ = env.reset()
     choices, steps = "", 0
-    with platform.session() as session:
+    # The episode's length, declared: the hierarchy's subtask caps scale to it, as pnpctl's.
+    with platform.session(episode_steps=env.max_episode_steps) as session:
         while True:
             p = session.act(obs["observation"], obs["desired_goal"])
             if p.decided and p.subtask:

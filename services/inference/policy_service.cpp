@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "services/common/access_control.h"
@@ -157,19 +158,30 @@ grpc::Status PolicyServiceImpl::PredictSession(
     auto slot = admit_stream(limits_, *context, "PredictSession");
     // The whole episode runs on the policy served when it began.
     const auto served = served_or_unavailable();
-    auto controller = served->acquire();
     policy::v1::PredictSessionRequest request;
     policy::v1::PredictSessionResponse response;
+    std::optional<serving::ServedPolicy::Lease> controller;
     while (!context->IsCancelled() && stream->Read(&request)) {
       const auto arrived = std::chrono::steady_clock::now();
       slot.touch();
+      // The first request declares the episode's length; the rest may only repeat it.
+      if (!controller) {
+        controller.emplace(served->acquire(request.episode_steps()));
+      } else if (request.episode_steps() != 0 &&
+                 request.episode_steps() != (*controller)->episode_steps()) {
+        throw_invalid_argument("episode_steps",
+                               "0 or the session's " +
+                                   std::to_string((*controller)->episode_steps()) +
+                                   " (declared by its first request)",
+                               std::to_string(request.episode_steps()));
+      }
       const sim::Observation observation = from_proto(request.observation(), "observation");
       const sim::Goal goal = from_proto(request.goal(), "goal");
-      const auto d = controller->act(observation, goal);
+      const auto d = (*controller)->act(observation, goal);
       fill(d, *response.mutable_prediction());
       response.set_decided(d.decided);
       response.set_placed(d.placed);
-      response.set_step(controller->steps());
+      response.set_step((*controller)->steps());
       if (!stream->Write(response)) break;
       if (session_step_seconds_)
         session_step_seconds_->Observe(

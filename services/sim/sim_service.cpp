@@ -141,6 +141,7 @@ grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEn
     response->set_env_id(registry_.create(robot, object, world, actuation, request->seed(),
                                           request->count(), timeout));
     response->set_count(request->count());
+    response->set_episode_steps(sim::episode_steps(actuation));
     return grpc::Status::OK;
   });
 }

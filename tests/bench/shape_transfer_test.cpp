@@ -87,7 +87,7 @@ TEST(ShapeTransferReport, TheTableShowsEachCellAndTheFineTuningSteps) {
   cells["cylinder"]["block_hierarchy"] = cell(150, 200, 0);
   cells["cylinder"]["fine_tuned"] = cell(190, 200, 1);
   cells["block"]["block_hierarchy"]["arm_world"] = {
-      {"success_at_step_50", 0.99},
+      {"success_at_episode_end", 0.99},
       {"success_any_step", 0.995},
       {"disagreements_with_gateway", nlohmann::json::array()}};
   nlohmann::json fine_tuning;

@@ -17,6 +17,8 @@
 #include "serving/served_end_to_end.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
+#include "sim/subtask.h"
+#include "sim/world_layout.h"
 #include "store/run_store.h"
 
 namespace pnp::services {
@@ -306,6 +308,62 @@ TEST_F(PolicyServiceTest, ASessionKeepsItsHierarchyWhileANewPromotionServesNewRe
   pv1::PredictResponse response;
   ASSERT_TRUE(stub_->Predict(&context, valid_request(), &response).ok());
   EXPECT_EQ(response.choreographer_checkpoint_id(), new_hlc);
+}
+
+// A session declares its episode's length in its first request and the hierarchy's subtask
+// caps scale to it; 0 is the served policy's own (this mocap-trained one's 50 steps).
+// A length out of bounds, or changed mid-session, is refused naming episode_steps.
+TEST_F(PolicyServiceTest, ASessionsDeclaredEpisodeSetsTheSubtaskCaps) {
+  promote_all(1);
+  start();
+  const auto r = valid_request();  // the same state every step: no subtask finishes
+  // Answers until the choreographer decides a second time, and its first subtask.
+  const auto first_span = [&](int declared) {
+    grpc::ClientContext context;
+    auto session = stub_->PredictSession(&context);
+    pv1::PredictSessionRequest step;
+    *step.mutable_observation() = r.observation();
+    *step.mutable_goal() = r.goal();
+    step.set_episode_steps(declared);
+    pv1::PredictSessionResponse answer;
+    EXPECT_TRUE(session->Write(step) && session->Read(&answer));
+    const auto first = answer.prediction().subtask();
+    int steps = 1;
+    while (steps < 1000 && session->Write(step) && session->Read(&answer) && !answer.decided())
+      ++steps;
+    session->WritesDone();
+    EXPECT_TRUE(session->Finish().ok());
+    return std::pair{first, steps};
+  };
+  const auto [first, own] = first_span(0);
+  const auto [first_on_arm, on_arm] = first_span(sim::layout::kArmEpisodeSteps);
+  EXPECT_EQ(first_on_arm, first);
+  sim::Subtask subtask = sim::Subtask::kApproach;
+  for (sim::Subtask s : sim::kAllSubtasks)
+    if (to_proto(s) == first) subtask = s;
+  EXPECT_EQ(own, sim::step_cap(subtask, sim::layout::kEpisodeSteps));
+  EXPECT_EQ(on_arm, sim::step_cap(subtask, sim::layout::kArmEpisodeSteps));
+
+  for (const auto& [first_steps, later_steps] : std::initializer_list<std::pair<int, int>>{
+           {-1, 0}, {sim::layout::kMaxEpisodeSteps + 1, 0}, {75, 50}}) {
+    grpc::ClientContext context;
+    auto session = stub_->PredictSession(&context);
+    pv1::PredictSessionRequest step;
+    *step.mutable_observation() = r.observation();
+    *step.mutable_goal() = r.goal();
+    step.set_episode_steps(first_steps);
+    pv1::PredictSessionResponse answer;
+    if (session->Write(step) && session->Read(&answer)) {
+      step.set_episode_steps(later_steps);
+      session->Write(step);
+      session->Read(&answer);
+    }
+    session->WritesDone();
+    const grpc::Status status = session->Finish();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << first_steps;
+    EXPECT_NE(status.error_message().find("episode_steps"), std::string::npos)
+        << status.error_message();
+  }
 }
 
 // Each session answer's time in the server is observed once (the session's RPC duration is

@@ -186,10 +186,13 @@ class Platform:
         return {"ready": response.ready,
                 "roles": [records.served_role_record(r) for r in response.roles]}
 
-    def session(self) -> Session:
-        """A live episode on the inference service (see Session)."""
+    def session(self, episode_steps: int = 0) -> Session:
+        """A live episode on the inference service (see Session). episode_steps: how long
+        the episode lasts (an environment's max_episode_steps), to which the hierarchy's
+        subtask step caps scale; 0: the served policy's own (50 on the mocap hand, 75 on
+        the arm)."""
         stub = policy_grpc.PolicyServiceStub(self._channel(self.endpoints.inference))
-        return Session(stub, self.endpoints.inference)
+        return Session(stub, self.endpoints.inference, episode_steps=episode_steps)
 
     def close(self) -> None:
         for channel in self._channels.values():

@@ -16,6 +16,7 @@ from pnp.sim_client import GOAL_SIZE, OBSERVATION_SIZE, vector3
 from pnp.common.v1 import common_pb2 as common
 
 _END = object()  # ends the request stream
+MAX_EPISODE_STEPS = 10000  # the server's bound (sim::layout::kMaxEpisodeSteps)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,7 +36,13 @@ class Session:
     """act(observation, goal) once per environment step, in order; close() (or a `with`
     block) ends the episode. Not for use from several threads at once."""
 
-    def __init__(self, stub, address: str, timeout_s: float | None = None):
+    def __init__(self, stub, address: str, timeout_s: float | None = None,
+                 episode_steps: int = 0):
+        if isinstance(episode_steps, bool) or not isinstance(episode_steps, int) \
+                or not 0 <= episode_steps <= MAX_EPISODE_STEPS:
+            raise ValueError(f"episode_steps: expected 0 (the served policy's own) to "
+                             f"{MAX_EPISODE_STEPS}, got {episode_steps!r}")
+        self._episode_steps = episode_steps
         self._address = address
         self._requests: queue.Queue = queue.Queue()
         self._responses = stub.PredictSession(iter(self._requests.get, _END), timeout=timeout_s)
@@ -47,7 +54,8 @@ class Session:
         request = policy.PredictSessionRequest(
             observation=common.Observation(values=_vector(observation, OBSERVATION_SIZE,
                                                           "observation")),
-            goal=vector3(_vector(goal, GOAL_SIZE, "goal")))
+            goal=vector3(_vector(goal, GOAL_SIZE, "goal")),
+            episode_steps=self._episode_steps)
         self._requests.put(request)
         try:
             answer = next(self._responses)

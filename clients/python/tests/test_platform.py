@@ -44,6 +44,17 @@ def test_a_session_answers_each_step(platform, sim_server):
         assert session.act(obs["observation"], obs["desired_goal"]).step == 2
 
 
+def test_a_session_declares_its_episode_length(platform, sim_server):
+    with pnp.PickAndPlaceEnv(sim_server.address, robot="panda", world="paper",
+                             actuation="arm") as env, \
+            platform.session(episode_steps=env.max_episode_steps) as session:
+        obs, _ = env.reset()
+        assert session.act(obs["observation"], obs["desired_goal"]).step == 1
+    for bad in (-1, 10001, 7.5, True):
+        with pytest.raises(ValueError, match="episode_steps: expected 0"):
+            platform.session(episode_steps=bad)
+
+
 def test_a_session_passes_on_the_servers_refusal(platform):
     with platform.session() as session:
         with pytest.raises(ValueError, match="observation: expected 25 values"):

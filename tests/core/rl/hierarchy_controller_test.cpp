@@ -57,6 +57,38 @@ TEST(HierarchyController, StepByStepEqualsTheGreedyEpisode) {
   }
 }
 
+// A subtask whose objective never fires ends at its cap: the cap of the episode the last
+// reset declared, so a mocap-trained hierarchy played on the arm's 75 steps gets the arm's.
+TEST(HierarchyController, SubtaskCapsFollowTheDeclaredEpisode) {
+  ChoreographerNet net({{8}, 4});
+  Rng init(0);
+  net.initialise(init);
+  HierarchyController controller(net, scripted_experts(), 0.05, sim::layout::kEpisodeSteps);
+  const sim::Observation still = sim::Observation::Zero();  // nothing moves: nothing is done
+  const sim::Goal goal(1.3, 0.7, 0.45);
+  // The first subtask and the steps it ran before the choreographer decided again.
+  const auto first_span = [&] {
+    const sim::Subtask first = controller.act(still, goal).subtask;
+    int steps = 1;
+    while (steps < 1000 && !controller.act(still, goal).decided) ++steps;
+    return std::pair{first, steps};
+  };
+  EXPECT_EQ(controller.episode_steps(), sim::layout::kEpisodeSteps);
+  const auto [first_50, steps_50] = first_span();
+  EXPECT_EQ(steps_50, sim::step_cap(first_50, sim::layout::kEpisodeSteps));
+
+  controller.reset(sim::layout::kArmEpisodeSteps);
+  EXPECT_EQ(controller.episode_steps(), sim::layout::kArmEpisodeSteps);
+  const auto [first_75, steps_75] = first_span();
+  EXPECT_EQ(first_75, first_50) << "the same choreographer, the same first choice";
+  EXPECT_EQ(steps_75, sim::step_cap(first_75, sim::layout::kArmEpisodeSteps));
+  EXPECT_GT(steps_75, steps_50);
+
+  controller.reset();  // keeps the last declared length
+  EXPECT_EQ(first_span().second, steps_75);
+  EXPECT_THROW(controller.reset(0), Error) << "an empty episode has no caps";
+}
+
 TEST(HierarchyController, RefusesANonFiniteObservationNamingIt) {
   ChoreographerNet net({{8}, 4});
   Rng init(0);

@@ -122,6 +122,8 @@ TEST(GatewayConfig, TypeErrorsNameTheKeyPath) {
   EXPECT_EQ(refusal_for(j), "max_episode_steps: expected an integer, got 4294967296");
   j["max_episode_steps"] = 18446744073709551615ULL;  // would wrap to -1 as a long long
   EXPECT_EQ(refusal_for(j), "max_episode_steps: expected an integer, got 18446744073709551615");
+  j["max_episode_steps"] = 10001;  // what a policy session may declare is bounded too
+  EXPECT_EQ(refusal_for(j), "max_episode_steps: expected 1 to 10000 steps, got 10001");
   j = minimal();
   j["base_frame_id"] = 7;
   EXPECT_EQ(refusal_for(j), "base_frame_id: expected a string, got 7");
@@ -156,7 +158,7 @@ TEST(GatewayConfig, ValidatesAfterParsing) {
             "cycle, got 0.03");
   j = minimal();
   j["max_episode_steps"] = 0;
-  EXPECT_EQ(refusal_for(j), "max_episode_steps: expected a positive integer, got 0");
+  EXPECT_EQ(refusal_for(j), "max_episode_steps: expected 1 to 10000 steps, got 0");
   j = minimal();
   j["action_scale_m"] = 0.2;
   EXPECT_EQ(refusal_for(j),

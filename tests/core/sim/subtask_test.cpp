@@ -90,6 +90,7 @@ TEST(StepCaps, DefinedOncePerSubtaskAndScaledWithTheEpisode) {
   EXPECT_EQ(step_cap(Subtask::kManipulate, 75), 22);
   EXPECT_EQ(step_cap(Subtask::kRetract, 75), 75);
   EXPECT_EQ(step_cap(Subtask::kManipulate, 1), 1) << "a cap is at least one step";
+  EXPECT_EQ(step_caps(75), (StepCaps{30, 22, 75})) << "indexed by Subtask, as step_cap gives them";
   try {
     step_cap(Subtask::kApproach, 0);
     FAIL() << "an empty episode got a cap";
