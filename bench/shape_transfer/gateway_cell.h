@@ -38,8 +38,8 @@ struct GatewayCellSpec {
 // The gateway's summary (gateway/gateway_summary.h) plus gateway_errors (episodes ended by
 // a refused reading, with their reasons), solved_at_start (successes at step 0: scenes
 // that start with the object within the success distance), wall_s, and arm_world: the
-// same scenes played by the same served policy in the arm-actuated world (success at step
-// 50 and at any step, and the scenes where the gateway disagrees with the world).
+// same scenes played by the same served policy in the arm-actuated world (success at the
+// episode's end and at any step, and the scenes where the gateway disagrees with the world).
 nlohmann::json play_gateway_cell(const GatewayCellSpec& spec, const ServedCheckpoints& served);
 
 }  // namespace pnp::bench

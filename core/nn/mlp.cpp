@@ -29,23 +29,42 @@ void validate(const MlpSpec& spec) {
   }
 }
 
+std::vector<int> layer_widths(const MlpSpec& spec) {
+  std::vector<int> widths{spec.inputs};
+  widths.insert(widths.end(), spec.hidden.begin(), spec.hidden.end());
+  widths.push_back(spec.outputs);
+  return widths;
+}
+
+std::size_t weight_count(int in, int out) {
+  return static_cast<std::size_t>(in) * static_cast<std::size_t>(out);
+}
+
 }  // namespace
+
+std::size_t Mlp::flat_size(const MlpSpec& spec) {
+  validate(spec);
+  const std::vector<int> widths = layer_widths(spec);
+  std::size_t size = 0;
+  for (std::size_t l = 0; l + 1 < widths.size(); ++l)
+    size += aligned(weight_count(widths[l], widths[l + 1])) +
+            aligned(static_cast<std::size_t>(widths[l + 1]));
+  return size;
+}
 
 Mlp::Mlp(MlpSpec spec) : spec_(std::move(spec)) {
   pin_blas_to_one_thread();
-  validate(spec_);
-  std::vector<int> widths{spec_.inputs};
-  widths.insert(widths.end(), spec_.hidden.begin(), spec_.hidden.end());
-  widths.push_back(spec_.outputs);
-  std::size_t size = 0;
+  const std::size_t size = flat_size(spec_);
+  const std::vector<int> widths = layer_widths(spec_);
+  std::size_t offset = 0;
   for (std::size_t l = 0; l + 1 < widths.size(); ++l) {
     Layer layer;
     layer.in = widths[l];
     layer.out = widths[l + 1];
-    layer.weight_offset = size;
-    size += aligned(static_cast<std::size_t>(layer.in * layer.out));
-    layer.bias_offset = size;
-    size += aligned(static_cast<std::size_t>(layer.out));
+    layer.weight_offset = offset;
+    offset += aligned(weight_count(layer.in, layer.out));
+    layer.bias_offset = offset;
+    offset += aligned(static_cast<std::size_t>(layer.out));
     layer.activation = l + 2 == widths.size() ? spec_.output_activation : spec_.hidden_activation;
     layers_.push_back(layer);
   }
@@ -61,9 +80,8 @@ void Mlp::initialise(Rng& rng) {
   std::fill(params_.begin(), params_.end(), 0.0f);
   for (const Layer& layer : layers_) {
     const double bound = 1.0 / std::sqrt(static_cast<double>(layer.in));
-    for (int i = 0; i < layer.in * layer.out; ++i) {
-      params_[layer.weight_offset + static_cast<std::size_t>(i)] =
-          static_cast<float>(rng.uniform(-bound, bound));
+    for (std::size_t i = 0; i < weight_count(layer.in, layer.out); ++i) {
+      params_[layer.weight_offset + i] = static_cast<float>(rng.uniform(-bound, bound));
     }
     for (int i = 0; i < layer.out; ++i) {
       params_[layer.bias_offset + static_cast<std::size_t>(i)] =

@@ -36,6 +36,10 @@ struct MlpWorkspace {
 class Mlp {
  public:
   explicit Mlp(MlpSpec spec);
+  // The floats params() holds for `spec` (tensors aligned as the constructor lays them
+  // out), in 64-bit arithmetic and without allocating: what a loader checks a section's
+  // size against first. INVALID_ARGUMENT for a width that is not positive.
+  static std::size_t flat_size(const MlpSpec& spec);
 
   const MlpSpec& spec() const { return spec_; }
   int layers() const { return static_cast<int>(layers_.size()); }

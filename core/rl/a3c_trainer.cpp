@@ -90,7 +90,6 @@ void A3cConfig::validate() const {
     throw_invalid_argument("gamma", "a value in (0, 1]", std::to_string(gamma));
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
     throw_invalid_argument("gae_lambda", "a value in [0, 1]", std::to_string(gae_lambda));
-  check_chain_prior("network.chain_prior", network.chain_prior);
   if (!(exploring_starts >= 0 && exploring_starts <= 1)) {
     throw_invalid_argument("exploring_starts", "a fraction in [0, 1]",
                            std::to_string(exploring_starts));
@@ -102,12 +101,7 @@ void A3cConfig::validate() const {
     throw_invalid_argument("value_weight", "a non-negative number", std::to_string(value_weight));
   if (!(max_grad_norm > 0))
     throw_invalid_argument("max_grad_norm", "a positive number", std::to_string(max_grad_norm));
-  if (network.lstm <= 0 || network.lstm > kMaxLstmWidth) {
-    throw_invalid_argument("network.lstm", "a width from 1 to " + std::to_string(kMaxLstmWidth),
-                           std::to_string(network.lstm));
-  }
-  // The trunk feeds the LSTM's four gates.
-  check_layer_widths("network.trunk", network.trunk, network.input_size(), 4 * network.lstm);
+  network.validate("network.");
 }
 
 void episode_gradients(ChoreographerNet& net, HlcEpisode& episode, const A3cConfig& c) {

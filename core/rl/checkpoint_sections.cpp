@@ -20,6 +20,16 @@ nlohmann::json read_meta(const nn::CheckpointReader& r, const std::string& kind)
   return j;
 }
 
+void require_float_section(const nn::CheckpointReader& r, const std::string& name,
+                           std::size_t count) {
+  const std::size_t bytes = r.bytes(name).size();
+  if (bytes != count * sizeof(float)) {
+    throw Error(ErrorCode::kDataLoss, "checkpoint: section \"" + name + "\" holds " +
+                                          std::to_string(bytes / sizeof(float)) +
+                                          " values, expected " + std::to_string(count));
+  }
+}
+
 void write_normalizer(nn::CheckpointWriter& w, const std::string& name, const nn::Normalizer& n) {
   w.add_doubles(name + ".sum", n.sums());
   w.add_doubles(name + ".sumsq", n.sums_of_squares());

@@ -26,6 +26,11 @@ auto parse_meta(const nlohmann::json& j, Parse parse) {
   }
 }
 
+// DATA_LOSS unless section `name` holds exactly `count` floats: checked before the network
+// it fills is allocated.
+void require_float_section(const nn::CheckpointReader& r, const std::string& name,
+                           std::size_t count);
+
 void write_normalizer(nn::CheckpointWriter& w, const std::string& name, const nn::Normalizer& n);
 // Restores `n` (already of the right size and clip) from the sections written above.
 void read_normalizer(const nn::CheckpointReader& r, const std::string& name, nn::Normalizer& n);

@@ -69,7 +69,8 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
     throw_invalid_argument("checkpoint network", "a trunk and a positive LSTM width",
                            "an empty network");
   }
-  check_chain_prior("checkpoint chain_prior", meta.network.chain_prior);
+  // Bounded before anything is allocated: the file's own metadata sizes the network.
+  meta.network.validate("checkpoint ");
   ChoreographerNet net(meta.network);
   auto blocks = net.parameter_blocks();
   for (std::size_t b = 0; b < blocks.size(); ++b)

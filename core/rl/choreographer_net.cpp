@@ -1,6 +1,10 @@
 #include "rl/choreographer_net.h"
 
 #include <algorithm>
+#include <string>
+
+#include "common/error.h"
+#include "rl/network_limits.h"
 
 namespace pnp::rl {
 namespace {
@@ -11,6 +15,17 @@ constexpr int kNormalised = sim::kObservationSize + sim::kGoalSize;
 
 int ChoreographerSpec::input_size() const {
   return kNormalised + (predicate_inputs ? sim::kNumSubtasks : 0);
+}
+
+void ChoreographerSpec::validate(std::string_view prefix) const {
+  const std::string name(prefix);
+  check_chain_prior(name + "chain_prior", chain_prior);
+  if (lstm <= 0 || lstm > kMaxLstmWidth) {
+    throw_invalid_argument(name + "lstm", "a width from 1 to " + std::to_string(kMaxLstmWidth),
+                           std::to_string(lstm));
+  }
+  // The trunk feeds the LSTM's four gates.
+  check_layer_widths(name + "trunk", trunk, input_size(), 4 * lstm);
 }
 
 ChoreographerNet::ChoreographerNet(const ChoreographerSpec& spec)

@@ -10,6 +10,7 @@
 // through the episode's decisions.
 
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "common/rng.h"
@@ -35,6 +36,10 @@ struct ChoreographerSpec {
   // paper's).
   double chain_prior = 0.0;
   int input_size() const;
+  // INVALID_ARGUMENT naming `prefix` + lstm, trunk or chain_prior outside the bounds of
+  // rl/network_limits.h: what a training request ("network.") and a checkpoint's metadata
+  // ("checkpoint ") may ask for.
+  void validate(std::string_view prefix) const;
   bool operator==(const ChoreographerSpec&) const = default;
 };
 

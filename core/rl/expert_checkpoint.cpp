@@ -6,6 +6,7 @@
 #include "nn/checkpoint_io.h"
 #include "nn/flat_ops.h"
 #include "rl/checkpoint_sections.h"
+#include "rl/network_limits.h"
 
 namespace pnp::rl {
 namespace {
@@ -84,12 +85,21 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.gemm_path = m.value("gemm_path", "");
     return out;
   });
-  nn::Mlp actor({kPolicyInputs, meta.hidden, kAct, meta.hidden_activation, nn::Activation::kTanh});
+  // Bounded, and each section's size checked, before anything is allocated: the file's own
+  // metadata sizes the networks (the critic, observation, goal and action in, is the larger).
+  check_layer_widths("checkpoint hidden", meta.hidden, kPolicyInputs + kAct, 1);
+  const nn::MlpSpec actor_spec{kPolicyInputs, meta.hidden, kAct, meta.hidden_activation,
+                               nn::Activation::kTanh};
+  const nn::MlpSpec critic_spec{kPolicyInputs + kAct, meta.hidden, 1, meta.hidden_activation,
+                                nn::Activation::kNone};
+  const bool has_critic = j.value("has_critic", false);
+  require_float_section(r, "actor", nn::Mlp::flat_size(actor_spec));
+  if (has_critic) require_float_section(r, "critic", nn::Mlp::flat_size(critic_spec));
+  nn::Mlp actor(actor_spec);
   nn::copy_into(actor.params(), r.floats("actor", actor.params().size()));
   std::optional<nn::Mlp> critic;
-  if (j.value("has_critic", false)) {
-    critic.emplace(nn::MlpSpec{kPolicyInputs + kAct, meta.hidden, 1, meta.hidden_activation,
-                               nn::Activation::kNone});
+  if (has_critic) {
+    critic.emplace(critic_spec);
     nn::copy_into(critic->params(), r.floats("critic", critic->params().size()));
   }
   nn::Normalizer obs_norm(sim::kObservationSize, meta.norm_clip, meta.norm_std_floor);

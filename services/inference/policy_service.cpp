@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "rl/checkpoint_probe.h"
 #include "services/common/access_control.h"
 #include "services/common/convert.h"
 #include "services/common/status.h"
@@ -197,20 +198,27 @@ grpc::Status PolicyServiceImpl::PromoteCheckpoint(
     policy::v1::PromoteCheckpointResponse* response) {
   return guarded([&] {
     std::vector<std::int64_t> ids;
-    if (request->checkpoint_id() != 0 || request->checkpoint_ids().empty())
-      ids.push_back(request->checkpoint_id());
+    const bool single = request->checkpoint_id() != 0 || request->checkpoint_ids().empty();
+    if (single) ids.push_back(request->checkpoint_id());
     ids.insert(ids.end(), request->checkpoint_ids().begin(), request->checkpoint_ids().end());
-    for (std::size_t i = 0; i < ids.size(); ++i) {
-      if (ids[i] <= 0) {
-        throw_invalid_argument(i == 0 && request->checkpoint_id() != 0
-                                   ? "checkpoint_id"
-                                   : "checkpoint_ids[" + std::to_string(i) + "]",
-                               "a positive id", std::to_string(ids[i]));
-      }
-    }
+    // ids[i]'s field: checkpoint_id, when used, comes first.
+    const auto field = [&](std::size_t i) {
+      const std::size_t first_listed = single ? 1 : 0;
+      return i < first_listed ? std::string("checkpoint_id")
+                              : "checkpoint_ids[" + std::to_string(i - first_listed) + "]";
+    };
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      if (ids[i] <= 0) throw_invalid_argument(field(i), "a positive id", std::to_string(ids[i]));
     {
       std::lock_guard lock(store_mutex_);
       if (!writer_) writer_ = open_writer_();  // the one write this service makes
+      // Every replica loads what is promoted: a checkpoint none could serve is refused
+      // before the promotion commits.
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        const store::Checkpoint checkpoint = writer_->load_checkpoint(ids[i]);
+        rl::probe_checkpoint(writer_->get_run(checkpoint.info.run_id).spec.role, checkpoint.blob,
+                             field(i) + " " + std::to_string(ids[i]));
+      }
       for (const store::Promotion& promotion : writer_->promote(ids, principal_of(*context))) {
         const store::CheckpointInfo info = writer_->checkpoint_info(promotion.checkpoint_id);
         const auto latest = writer_->latest_checkpoint(info.run_id);

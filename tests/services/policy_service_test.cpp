@@ -223,6 +223,37 @@ TEST_F(PolicyServiceTest, BadInputIsRefusedNamingTheField) {
   EXPECT_EQ(store_->promoted("hlc")->checkpoint_id, ids_[3]) << "refusals change nothing";
 }
 
+// A checkpoint no replica could serve (its weights are not numbers, or it is another
+// role's file) is refused before the promotion commits, naming it; the hierarchy served
+// before keeps serving.
+TEST_F(PolicyServiceTest, ACheckpointThatFailsItsProbeIsNeverPromoted) {
+  promote_all(1);
+  start();
+  rl::ChoreographerNet net({{16}, 4});
+  Rng rng(5);
+  net.initialise(rng);
+  net.parameter_blocks()[0][0] = std::nanf("");
+  const auto poisoned = store_checkpoint(
+      "hlc", rl::save_choreographer({"fetch", "block", "paper", net.spec(), 0, 0, 5, "test"}, net));
+  const auto misfiled = store_checkpoint("hlc", expert_blob("retract", 5));
+  for (const auto id : {poisoned, misfiled}) {
+    grpc::ClientContext context;
+    pv1::PromoteCheckpointRequest promote;
+    pv1::PromoteCheckpointResponse promoted;
+    promote.add_checkpoint_ids(ids_[0]);
+    promote.add_checkpoint_ids(id);
+    const grpc::Status status = stub_->PromoteCheckpoint(&context, promote, &promoted);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_EQ(status.error_message().rfind("checkpoint_ids[1] " + std::to_string(id) + ": ", 0), 0u)
+        << status.error_message();
+  }
+  EXPECT_EQ(store_->promoted("hlc")->checkpoint_id, ids_[3]) << "nothing was promoted";
+  grpc::ClientContext context;
+  pv1::PredictResponse response;
+  ASSERT_TRUE(stub_->Predict(&context, valid_request(), &response).ok());
+  EXPECT_EQ(response.choreographer_checkpoint_id(), ids_[3]);
+}
+
 TEST_F(PolicyServiceTest, NothingPromotedIsAFailedPreconditionThenServesOncePromoted) {
   start();
   grpc::ClientContext status_context;
