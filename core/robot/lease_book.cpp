@@ -1,6 +1,7 @@
 #include "robot/lease_book.h"
 
 #include "common/error.h"
+#include "common/secret_token.h"
 
 namespace pnp::robot {
 
@@ -16,10 +17,9 @@ std::string LeaseBook::acquire(const std::string& client, Clock::duration timeou
         ErrorCode::kFailedPrecondition,
         "the arm is leased to \"" + *who + "\": wait until it releases the lease or it expires");
   }
-  ++issued_;
-  Lease lease{
-      client + "-" + std::to_string(issued_) + "-" + std::to_string(now.time_since_epoch().count()),
-      client, timeout, now + timeout};
+  // The id is the capability to drive the arm: 128 random bits, never derived from the
+  // name, a counter or the clock (those were guessable), and never logged.
+  Lease lease{secret_token_hex(16), client, timeout, now + timeout};
   current_ = std::move(lease);
   return current_->id;
 }

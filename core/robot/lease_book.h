@@ -35,7 +35,6 @@ class LeaseBook {
     Clock::time_point expires;
   };
   std::optional<Lease> current_;
-  std::uint64_t issued_ = 0;  // makes ids unique within the process's life
 };
 
 }  // namespace pnp::robot

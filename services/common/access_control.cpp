@@ -1,10 +1,12 @@
 #include "services/common/access_control.h"
 
+#include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
 #include <google/protobuf/util/json_util.h>
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <mutex>
 
 #include "common/handover.h"
@@ -109,10 +111,36 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
   HandedOver handed_over_;  // last: gRPC calls and destroys it on its own threads
 };
 
+// A lease id is the capability to drive the arm, and more people read the audit than may
+// drive it: every lease_id in a request, however deep, is recorded as "[redacted]".
+void redact_capabilities(google::protobuf::Message& message) {
+  using google::protobuf::FieldDescriptor;
+  const auto* descriptor = message.GetDescriptor();
+  const auto* reflection = message.GetReflection();
+  for (int i = 0; i < descriptor->field_count(); ++i) {
+    const FieldDescriptor* field = descriptor->field(i);
+    if (field->cpp_type() == FieldDescriptor::CPPTYPE_STRING && !field->is_repeated() &&
+        field->name() == "lease_id") {
+      if (!reflection->GetString(message, field).empty())
+        reflection->SetString(&message, field, "[redacted]");
+    } else if (field->cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE) {
+      if (field->is_repeated()) {
+        for (int j = 0; j < reflection->FieldSize(message, field); ++j)
+          redact_capabilities(*reflection->MutableRepeatedMessage(&message, field, j));
+      } else if (reflection->HasField(message, field)) {
+        redact_capabilities(*reflection->MutableMessage(&message, field));
+      }
+    }
+  }
+}
+
 std::string request_json(const void* message) {
   if (message == nullptr) return "{}";
   // Every pnp service is generated from .proto files: its messages are protobuf messages.
-  const auto* proto = static_cast<const google::protobuf::Message*>(message);
+  const auto* received = static_cast<const google::protobuf::Message*>(message);
+  const std::unique_ptr<google::protobuf::Message> proto(received->New());
+  proto->CopyFrom(*received);
+  redact_capabilities(*proto);
   std::string json;
   google::protobuf::util::JsonPrintOptions options;
   options.preserve_proto_field_names = true;

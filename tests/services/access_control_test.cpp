@@ -100,6 +100,11 @@ class RecordingController final : public rv1::RobotControllerService::Service {
     response->set_lease_id("lease-1");
     return grpc::Status::OK;
   }
+  grpc::Status ReleaseLease(grpc::ServerContext* context, const rv1::ReleaseLeaseRequest*,
+                            rv1::ReleaseLeaseResponse*) override {
+    seen(*context);
+    return grpc::Status::OK;
+  }
   grpc::Status Stop(grpc::ServerContext* context, const rv1::StopRequest*,
                     rv1::StopResponse*) override {
     seen(*context);
@@ -278,6 +283,24 @@ TEST_F(AccessControl, AReaderTokenMayReadAndStopButNotTakeALease) {
   EXPECT_EQ(records[1].code, "OK");
   EXPECT_NE(records[1].request.find("\"reason\":\"test\""), std::string::npos);
   EXPECT_NE(records[1].peer.find("127.0.0.1"), std::string::npos);
+}
+
+// A lease id is the capability to drive the arm: the audit records the call, never the id.
+TEST_F(AccessControl, TheAuditNeverRecordsALeaseId) {
+  start(/*mutual_tls=*/true);
+  auto gateway = client("a", "gateway", /*by_token=*/false, /*by_cert=*/true);
+  ASSERT_TRUE(acquire(*gateway).ok());
+  grpc::ClientContext context;
+  rv1::ReleaseLeaseRequest request;
+  request.set_lease_id("lease-1");
+  rv1::ReleaseLeaseResponse response;
+  ASSERT_TRUE(gateway->ReleaseLease(&context, request, &response).ok());
+  const auto records = audit_records();
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(records[1].rpc, "/pnp.robot.v1.RobotControllerService/ReleaseLease");
+  EXPECT_EQ(records[1].principal, "gateway");
+  EXPECT_EQ(records[1].request, "{\"lease_id\":\"[redacted]\"}");
+  for (const auto& r : records) EXPECT_EQ(r.request.find("lease-1"), std::string::npos);
 }
 
 TEST_F(AccessControl, AnUnknownTokenIsUnauthenticatedEvenForReads) {

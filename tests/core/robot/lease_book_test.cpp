@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <optional>
+#include <set>
+#include <string>
 
 #include "common/error.h"
 
@@ -19,6 +21,23 @@ std::optional<ErrorCode> code_of(auto&& call) {
     return e.code();
   }
   return std::nullopt;
+}
+
+// A lease id is the capability to drive the arm: 128 random bits as hex, nothing a
+// stranger could derive from the holder's name, a counter or the time.
+TEST(LeaseBook, IdsAreRandomAndSayNothingOfTheirHolder) {
+  LeaseBook book;
+  const auto t0 = Clock::time_point{} + 10s;
+  std::set<std::string> ids;
+  for (int i = 0; i < 50; ++i) {
+    const std::string id = book.acquire("gateway-a", 1s, t0);
+    EXPECT_EQ(id.size(), 32u);
+    EXPECT_EQ(id.find_first_not_of("0123456789abcdef"), std::string::npos) << id;
+    EXPECT_EQ(id.find("gateway"), std::string::npos) << id;
+    ids.insert(id);
+    book.release(id);
+  }
+  EXPECT_EQ(ids.size(), 50u) << "the same time and name never give the same id";
 }
 
 TEST(LeaseBook, OneHolderAtATimeUntilReleased) {
