@@ -25,11 +25,10 @@ ControllerStatus status_of(TargetCode code) {
 
 IntakeOutcome take_into_arm(SimulatedArm& arm, const ControllerLimits& limits,
                             const ArmTarget& target) {
-  // A non-finite position is the arm's to refuse (as an invalid target), by name.
-  if (target.position_m.allFinite()) {
-    if (auto outside = limits.refusal(target.position_m, arm.state().commanded_base)) {
-      return {ControllerStatus::kOutsideLimits, std::move(*outside)};
-    }
+  // A non-finite pose is the arm's to refuse (as an invalid target), by name.
+  if (auto outside =
+          limits.refusal({target.position_m, target.orientation}, arm.state().commanded_base)) {
+    return {ControllerStatus::kOutsideLimits, std::move(*outside)};
   }
   const double speed =
       limits.capped_speed(target.max_speed_m_per_s, arm.options().default_max_speed_m_per_s);

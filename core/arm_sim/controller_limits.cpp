@@ -6,6 +6,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "arm_sim/simulated_arm.h"
 #include "common/error.h"
 #include "robot/json_fields.h"
 
@@ -31,14 +32,15 @@ std::string vec(const Eigen::Vector3d& v) {
 void ControllerLimits::validate() const {
   robot::validate_workspace(workspace, table_top_z_m, "controller");
   require_positive_finite(max_step_m, "controller.max_step_m", "m");
+  require_positive_finite(max_rotation_step_rad, "controller.max_rotation_step_rad", "rad");
   require_positive_finite(max_speed_m_per_s, "controller.max_speed_m_per_s", "m/s");
   require_positive_finite(max_target_age_s, "controller.max_target_age_s", "s");
 }
 
 ControllerLimits ControllerLimits::from_json(const json& j) {
-  require_object(
-      j, "controller",
-      {"workspace", "table_top_z_m", "max_step_m", "max_speed_m_per_s", "max_target_age_s"});
+  require_object(j, "controller",
+                 {"workspace", "table_top_z_m", "max_step_m", "max_rotation_step_rad",
+                  "max_speed_m_per_s", "max_target_age_s"});
   ControllerLimits l;
   if (const auto ws = j.find("workspace"); ws != j.end()) {
     require_object(*ws, "controller.workspace", {"min_m", "max_m"});
@@ -47,6 +49,7 @@ ControllerLimits ControllerLimits::from_json(const json& j) {
   }
   read_number(j, "table_top_z_m", "controller", l.table_top_z_m);
   read_number(j, "max_step_m", "controller", l.max_step_m);
+  read_number(j, "max_rotation_step_rad", "controller", l.max_rotation_step_rad);
   read_number(j, "max_speed_m_per_s", "controller", l.max_speed_m_per_s);
   read_number(j, "max_target_age_s", "controller", l.max_target_age_s);
   l.validate();
@@ -67,12 +70,15 @@ json ControllerLimits::to_json() const {
            {{"min_m", vector3_json(workspace.min_m)}, {"max_m", vector3_json(workspace.max_m)}}},
           {"table_top_z_m", table_top_z_m},
           {"max_step_m", max_step_m},
+          {"max_rotation_step_rad", max_rotation_step_rad},
           {"max_speed_m_per_s", max_speed_m_per_s},
           {"max_target_age_s", max_target_age_s}};
 }
 
-std::optional<std::string> ControllerLimits::refusal(const Eigen::Vector3d& position_base_m,
+std::optional<std::string> ControllerLimits::refusal(const geometry::Pose& target_base,
                                                      const geometry::Pose& commanded_base) const {
+  const Eigen::Vector3d& position_base_m = target_base.position_m;
+  if (!position_base_m.allFinite()) return std::nullopt;
   if (!workspace.contains(position_base_m)) {
     return fmt::format("position: {} m is outside the controller's workspace {} .. {} m",
                        vec(position_base_m), vec(workspace.min_m), vec(workspace.max_m));
@@ -83,6 +89,18 @@ std::optional<std::string> ControllerLimits::refusal(const Eigen::Vector3d& posi
         "position: {:.4f} m from the commanded pose, more than the controller's "
         "max_step_m {} m",
         step, max_step_m);
+  }
+  // Only a unit quaternion has a turn to measure; anything else is the arm's to refuse.
+  const Eigen::Vector4d q = target_base.orientation.coeffs();
+  if (q.allFinite() && std::abs(q.norm() - 1.0) <= kUnitQuaternionTolerance) {
+    const double turn = target_base.orientation.normalized().angularDistance(
+        commanded_base.orientation.normalized());
+    if (!(turn <= max_rotation_step_rad)) {
+      return fmt::format(
+          "orientation: {:.4f} rad from the commanded orientation, more than the controller's "
+          "max_rotation_step_rad {} rad",
+          turn, max_rotation_step_rad);
+    }
   }
   return std::nullopt;
 }

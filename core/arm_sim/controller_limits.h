@@ -7,7 +7,8 @@
 // or faster than the arm's Cartesian limit.
 //
 //   {"workspace": {"min_m": [x, y, z], "max_m": [x, y, z]}, "table_top_z_m": 0,
-//    "max_step_m": 0.15, "max_speed_m_per_s": 1.7, "max_target_age_s": 0.25}
+//    "max_step_m": 0.15, "max_rotation_step_rad": 0.3, "max_speed_m_per_s": 1.7,
+//    "max_target_age_s": 0.25}
 //
 // Every key may be left out (the defaults below); unknown keys are refused.
 
@@ -30,6 +31,10 @@ struct ControllerLimits {
   double table_top_z_m = 0.0;  // in the base frame
   // From the pose the motion generator commands now: a policy step is at most 8.7 cm.
   double max_step_m = 0.15;
+  // From the orientation commanded now: the policy never turns the hand, so a larger turn
+  // in one target is a fault (a flipped quaternion, a wrong frame). Wider than the
+  // gateway's 0.2 rad (robot::SafetyLimits), so the gateway refuses first.
+  double max_rotation_step_rad = 0.3;
   // The Panda's Cartesian translation limit (Franka's datasheet); a client's
   // max_speed_m_per_s is capped to it.
   double max_speed_m_per_s = 1.7;
@@ -45,9 +50,10 @@ struct ControllerLimits {
   static ControllerLimits load(const std::filesystem::path& path);  // errors name the path
   nlohmann::json to_json() const;
 
-  // Why `position_base_m` may not be commanded from `commanded_base`, naming the limit;
-  // nullopt when it may.
-  std::optional<std::string> refusal(const Eigen::Vector3d& position_base_m,
+  // Why `target_base` may not be commanded from `commanded_base`, naming the limit;
+  // nullopt when it may. A position that is not finite, or an orientation that is not a
+  // unit quaternion, is left to the arm to refuse as an invalid target.
+  std::optional<std::string> refusal(const geometry::Pose& target_base,
                                      const geometry::Pose& commanded_base) const;
   // The speed a segment is driven at: the client's (0: the arm's default), capped.
   double capped_speed(double requested_m_per_s, double default_m_per_s) const;

@@ -25,7 +25,6 @@ using ArmVector = Eigen::Matrix<double, kJoints, 1>;
 using ArmMatrix = Eigen::Matrix<double, kJoints, kJoints>;
 using Jacobian = Eigen::Matrix<double, 6, kJoints>;
 
-constexpr double kUnitQuaternionTolerance = 1e-3;
 constexpr double kMaxIkStep_rad = 0.2;  // per iteration: keeps the linearisation valid
 // A braking reference slower than this on every joint is at rest (a Panda's joints report
 // about 1e-3 rad/s of noise at standstill).

@@ -38,6 +38,9 @@
 
 namespace pnp::arm_sim {
 
+// | |q| - 1 | allowed for a target's orientation; beyond it the target is invalid.
+inline constexpr double kUnitQuaternionTolerance = 1e-3;
+
 inline constexpr int kJoints = sim::kArmJoints;
 inline constexpr double kControlPeriod_s = 0.001;  // the controller's 1 kHz tick
 using JointVector = std::array<double, kJoints>;

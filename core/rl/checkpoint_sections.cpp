@@ -15,8 +15,15 @@ nlohmann::json read_meta(const nn::CheckpointReader& r, const std::string& kind)
   } catch (const nlohmann::json::exception& e) {
     throw Error(ErrorCode::kDataLoss, std::string("checkpoint: unreadable metadata: ") + e.what());
   }
-  const std::string found = j.is_object() ? j.value("kind", "") : "";
-  if (found != kind) throw_invalid_argument("checkpoint kind", kind, "\"" + found + "\"");
+  // Anything but the expected string (a number, a missing key, metadata that is not an
+  // object) is another kind of file.
+  const auto field = j.is_object() ? j.find("kind") : j.end();
+  const bool found = field != j.end() && field->is_string();
+  if (!found || field->get_ref<const std::string&>() != kind) {
+    throw_invalid_argument("checkpoint kind", kind,
+                           found ? "\"" + field->get_ref<const std::string&>() + "\""
+                                 : (field == j.end() ? std::string("none") : field->dump()));
+  }
   return j;
 }
 

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include "services/common/robot_convert.h"
 #include "services/common/server_runtime.h"
 #include "services/common/time_convert.h"
@@ -297,10 +299,25 @@ TEST_F(RobotControllerServiceTest, TheControllersOwnLimitsHoldWithoutTheGateway)
   EXPECT_EQ(far->status(), rv1::CONTROLLER_STATUS_OUTSIDE_LIMITS);
   EXPECT_NE(far->errors(0).find("max_step_m"), std::string::npos) << far->errors(0);
 
+  // Half a radian about the hand's axis in one target: a flip, refused here too.
+  auto turned = target_above(3, 0.0);
+  const auto& o = turned.pose().orientation();
+  const Eigen::Quaterniond q = Eigen::Quaterniond(o.w(), o.x(), o.y(), o.z()) *
+                               Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+  turned.mutable_pose()->mutable_orientation()->set_w(q.w());
+  turned.mutable_pose()->mutable_orientation()->set_x(q.x());
+  turned.mutable_pose()->mutable_orientation()->set_y(q.y());
+  turned.mutable_pose()->mutable_orientation()->set_z(q.z());
+  const auto flipped = send(*drive, turned);
+  ASSERT_TRUE(flipped);
+  EXPECT_EQ(flipped->status(), rv1::CONTROLLER_STATUS_OUTSIDE_LIMITS);
+  EXPECT_NE(flipped->errors(0).find("max_rotation_step_rad"), std::string::npos)
+      << flipped->errors(0);
+
   // 10 cm up at 100 m/s: interpolated at the arm's 1.7 m/s, so after one 40 ms period of
   // lockstep physics the Cartesian set point is 6.8 cm up, not at the target.
   const double before = arm_.state().arm.setpoint_base.position_m.z();
-  auto fast = target_above(3, 0.1);
+  auto fast = target_above(4, 0.1);
   fast.set_max_speed_m_per_s(100);
   const auto taken = send(*drive, fast);
   ASSERT_TRUE(taken);

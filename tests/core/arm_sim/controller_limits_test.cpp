@@ -38,7 +38,7 @@ TEST(ControllerLimits, TheDeployedFileIsTheDefaultsAndHoldsTheGatewaysBox) {
 TEST(ControllerLimits, EveryKeyIsCheckedAndNamed) {
   EXPECT_EQ(refusal_for({{"max_step", 0.1}}),
             "controller.max_step: unknown key (expected one of workspace, table_top_z_m, "
-            "max_step_m, max_speed_m_per_s, max_target_age_s)");
+            "max_step_m, max_rotation_step_rad, max_speed_m_per_s, max_target_age_s)");
   EXPECT_EQ(refusal_for({{"max_speed_m_per_s", -1}}),
             "controller.max_speed_m_per_s: expected a positive finite number (m/s), got -1");
   EXPECT_NE(refusal_for({{"workspace", {{"min_m", {0.1, -0.4, 0.0}}}}})
@@ -47,20 +47,35 @@ TEST(ControllerLimits, EveryKeyIsCheckedAndNamed) {
   EXPECT_NE(refusal_for({{"workspace", {{"max_m", {74, 0.4, 0.5}}}}})
                 .find("controller.workspace.max_m[0]"),
             std::string::npos);
+  EXPECT_EQ(refusal_for({{"max_rotation_step_rad", 0}}),
+            "controller.max_rotation_step_rad: expected a positive finite number (rad), got 0");
   EXPECT_EQ(refusal_for({{"max_target_age_s", "soon"}}),
             "controller.max_target_age_s: expected a number, got \"soon\"");
 }
 
 TEST(ControllerLimits, RefusesOutsideTheBoxAndTooFarAStep) {
   const ControllerLimits l;
-  const geometry::Pose commanded{{0.45, 0.0, 0.2}, Eigen::Quaterniond(0, 1, 0, 0)};
-  EXPECT_FALSE(l.refusal({0.45, 0.0, 0.25}, commanded));
-  const auto below = l.refusal({0.45, 0.0, 0.0}, commanded);
+  const Eigen::Quaterniond down(0, 1, 0, 0);
+  const geometry::Pose commanded{{0.45, 0.0, 0.2}, down};
+  EXPECT_FALSE(l.refusal({{0.45, 0.0, 0.25}, down}, commanded));
+  const auto below = l.refusal({{0.45, 0.0, 0.0}, down}, commanded);
   ASSERT_TRUE(below);
   EXPECT_NE(below->find("outside the controller's workspace"), std::string::npos) << *below;
-  const auto far = l.refusal({0.45, 0.3, 0.2}, commanded);
+  const auto far = l.refusal({{0.45, 0.3, 0.2}, down}, commanded);
   ASSERT_TRUE(far);
   EXPECT_NE(far->find("max_step_m"), std::string::npos) << *far;
+  // The controller checks the turn itself, not only the gateway: 0.25 rad passes, 0.35 not.
+  const auto turned = [&](double rad) {
+    return geometry::Pose{
+        {0.45, 0.0, 0.2},
+        down * Eigen::Quaterniond(Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitZ()))};
+  };
+  EXPECT_FALSE(l.refusal(turned(0.25), commanded));
+  const auto flipped = l.refusal(turned(0.35), commanded);
+  ASSERT_TRUE(flipped);
+  EXPECT_NE(flipped->find("max_rotation_step_rad 0.3"), std::string::npos) << *flipped;
+  EXPECT_FALSE(l.refusal({{0.45, 0.0, 0.2}, Eigen::Quaterniond(3, 1, 0, 0)}, commanded))
+      << "not a unit quaternion: the arm refuses it as an invalid target";
   EXPECT_DOUBLE_EQ(l.capped_speed(100, 1.0), 1.7);
   EXPECT_DOUBLE_EQ(l.capped_speed(0, 1.0), 1.0);  // 0: the arm's default
   EXPECT_DOUBLE_EQ(l.capped_speed(0.5, 1.0), 0.5);

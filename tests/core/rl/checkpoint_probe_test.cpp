@@ -103,6 +103,12 @@ TEST(CheckpointProbe, HugeWidthsInTheMetadataAreRefusedBeforeAllocating) {
                               {"block0", "norm.sum", "norm.sumsq", "norm.count"});
   EXPECT_EQ(code_of([&] { load_choreographer(wide); }, &message), ErrorCode::kInvalidArgument);
   EXPECT_NE(message.find("checkpoint lstm"), std::string::npos) << message;
+  // Found by the fuzzer once it got past the checksum: a kind that is not a string.
+  const auto numbered =
+      with_meta(choreographer_blob(), "choreographer", [](nlohmann::json& m) { m["kind"] = 32; },
+                {"block0", "norm.sum", "norm.sumsq", "norm.count"});
+  EXPECT_EQ(code_of([&] { load_choreographer(numbered); }, &message), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(message, "checkpoint kind: expected choreographer, got 32");
 }
 
 // Widths within bounds but not those the sections hold: DATA_LOSS from the sizes alone.
