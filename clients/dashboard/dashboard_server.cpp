@@ -125,6 +125,12 @@ void check_exposure(const DashboardConfig& config) {
                 "--address " + config.address +
                     ": plaintext HTTP is for loopback only; give --tls-cert and --tls-key (and "
                     "--auth-policy: readers only), or reach it through an SSH tunnel");
+  // It shows every run and plays the served policy: strangers sign in first.
+  if (!config.policy && !services::is_loopback_address(config.address))
+    throw Error(ErrorCode::kFailedPrecondition,
+                "--address " + config.address +
+                    ": beyond loopback the dashboard needs --auth-policy (readers sign in "
+                    "with a token), or reach it through an SSH tunnel");
 }
 
 }  // namespace

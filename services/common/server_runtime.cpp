@@ -30,11 +30,22 @@ void check_exposure(const std::string& address, const std::string& metrics_addre
                 "mean nothing over plaintext");
   }
   if (security.insecure) return;
-  if (!security.tls.enabled() && !is_loopback_address(address)) {
-    throw Error(ErrorCode::kFailedPrecondition,
-                "--address " + address +
-                    " is reachable beyond this machine: serve TLS (--tls-cert, --tls-key, "
-                    "and --tls-client-ca or --auth-policy) or pass --insecure");
+  if (!is_loopback_address(address)) {
+    if (!security.tls.enabled()) {
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "--address " + address +
+                      " is reachable beyond this machine: serve TLS (--tls-cert, --tls-key, "
+                      "and --tls-client-ca or --auth-policy) or pass --insecure");
+    }
+    // TLS alone encrypts; it does not say who calls. Every server changes state (and one
+    // moves the arm): beyond loopback a caller must authenticate.
+    if (security.tls.client_ca.empty() && !security.policy) {
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "--address " + address +
+                      " is reachable beyond this machine and TLS without --tls-client-ca or "
+                      "--auth-policy lets anyone call: require client certificates "
+                      "(--tls-client-ca) or tokens (--auth-policy), or pass --insecure");
+    }
   }
   if (!metrics_address.empty() && !is_loopback_address(metrics_address) &&
       !security.public_metrics) {

@@ -196,9 +196,12 @@ TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
 TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
   TempDir dir("dashboard_refusals");
   // Starts the dashboard on `db`; expects exit code 1 and returns what it said.
-  const auto refusal = [&](const std::string& name, const std::string& db) {
-    ChildProcess dashboard(
-        name, {PNP_BIN_DIR "/pnp-dashboard", "--address", "0.0.0.0:0", "--db", db}, dir.path());
+  const auto refusal = [&](const std::string& name, const std::string& db,
+                           const std::vector<std::string>& more = {}) {
+    std::vector<std::string> args{PNP_BIN_DIR "/pnp-dashboard", "--address", "0.0.0.0:0", "--db",
+                                  db};
+    args.insert(args.end(), more.begin(), more.end());
+    ChildProcess dashboard(name, args, dir.path());
     const auto status = dashboard.wait(30s);
     EXPECT_TRUE(status && status->exited && status->code == 1) << dashboard.diagnostics();
     return dashboard.stderr_text();
@@ -206,6 +209,11 @@ TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
   EXPECT_NE(refusal("missing", dir.file("missing.db")).find("no store at"), std::string::npos);
   { store::RunStore store(dir.file("pnp.db")); }
   EXPECT_NE(refusal("exposed", dir.file("pnp.db")).find("plaintext HTTP is for loopback only"),
+            std::string::npos);
+  // TLS without a policy: anyone could read every run and play the served policy.
+  EXPECT_NE(refusal("anonymous", dir.file("pnp.db"),
+                    {"--tls-cert", dir.file("server.pem"), "--tls-key", dir.file("server.key")})
+                .find("beyond loopback the dashboard needs --auth-policy"),
             std::string::npos);
 }
 

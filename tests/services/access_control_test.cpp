@@ -430,6 +430,33 @@ TEST(ServerExposure, PlaintextBeyondLoopbackIsRefusedUnlessInsecure) {
   EXPECT_EQ(refused({.address = "0.0.0.0:0", .services = {&controller}, .security = insecure}), "");
 }
 
+// TLS encrypts but does not say who calls: beyond loopback a server also needs client
+// certificates or tokens. (check_exposure reads no files: the names stand for them.)
+TEST(ServerExposure, TlsWithoutClientAuthenticationBeyondLoopbackIsRefused) {
+  ServerSecurity tls_only;
+  tls_only.tls.cert = "server.pem";
+  tls_only.tls.key = "server.key";
+  try {
+    check_exposure("0.0.0.0:50051", "", tls_only);
+    FAIL() << "TLS without client authentication was allowed beyond loopback";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("--tls-client-ca or --auth-policy"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(check_exposure("127.0.0.1:50051", "", tls_only)) << "loopback: the machine's";
+  ServerSecurity mutual = tls_only;
+  mutual.tls.client_ca = "ca.pem";
+  EXPECT_NO_THROW(check_exposure("0.0.0.0:50051", "", mutual));
+  ServerSecurity tokens = tls_only;
+  tokens.policy = std::make_shared<const security::AuthPolicy>(security::AuthPolicy::parse(
+      R"({"principals": [{"name": "a", "cert_cn": "a", "classes": ["reader"]}]})", "p"));
+  EXPECT_NO_THROW(check_exposure("0.0.0.0:50051", "", tokens));
+  ServerSecurity insecure = tls_only;
+  insecure.insecure = true;
+  EXPECT_NO_THROW(check_exposure("0.0.0.0:50051", "", insecure));
+}
+
 TEST(ClientTransport, ATokenIsNeverSentOverPlaintext) {
   ClientTlsFiles tls;
   tls.token_file = "/dev/null";
