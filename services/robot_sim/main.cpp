@@ -4,7 +4,7 @@
 //   --address 127.0.0.1:50070  --object block  --clock realtime|lockstep
 //   [--limits deploy/robot/controller.json] [--metrics-address 127.0.0.1:9107]
 //   [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]] [--auth-policy FILE] [--insecure]
-//   [--audit-db FILE]  (docs/RELIABILITY.md, "Who may do what")
+//   [--audit-db FILE | --store HOST:PORT]  (docs/RELIABILITY.md, "Who may do what")
 // The limits file is the controller's own (workspace, table plane, step, speed, target
 // age): nothing over the network changes it.
 
@@ -18,6 +18,8 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/robot_sim/robot_controller_service.h"
+#include "services/store/remote_audit.h"
+#include "services/store/store_flags.h"
 
 int main(int argc, char** argv) {
   using namespace pnp::services;
@@ -50,13 +52,20 @@ int main(int argc, char** argv) {
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   ServerSecurityFlags security_flags;
   add_server_security_flags(app, security_flags, /*audit_db_flag=*/true);
+  // The audit through pnp-store-server instead of a file: every robot call lands in the
+  // platform's one audit table.
+  RemoteStoreFlags store_flags;
+  add_remote_store_flags(app, store_flags, app.get_option("--audit-db"));
   StreamLimitOptions limit_options;
   double idle_timeout_s = 0;
   add_stream_limit_flags(app, limit_options, idle_timeout_s);
   CLI11_PARSE(app, argc, argv);
   try {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
-    const auto audit = open_audit_trail(security_flags.audit_db, "robot_sim");
+    const auto audit =
+        store_flags.remote()
+            ? open_remote_audit_trail(store_flags.address, store_flags.tls, "robot_sim")
+            : open_audit_trail(security_flags.audit_db, "robot_sim");
     security.audit = audit.get();
     pnp::arm_sim::StandInOptions options;
     options.object = pnp::sim::parse_object(object, "--object");

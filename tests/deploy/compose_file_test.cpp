@@ -50,9 +50,10 @@ TEST_F(ComposeFile, OnlyTheStoreServerHasTheDatabaseAndItsVolume) {
   EXPECT_EQ(with_volume, std::set<std::string>{"store"});
   EXPECT_EQ(commands_["store"].front(), "pnp-store-server");
   for (const auto& [name, line] : commands_) {
+    // The robot controller has no store of its own, but its audit goes to the store's.
     const bool stateful_server = line.front() == "pnp-train-server" ||
                                  line.front() == "pnp-inference-server" ||
-                                 line.front() == "pnp-dashboard";
+                                 line.front() == "pnp-dashboard" || line.front() == "pnp-robot-sim";
     if (stateful_server) {
       EXPECT_EQ(flag(line, "--store"), "store:50050") << name;
     }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
+#include "pnp/robot/v1/robot_controller.grpc.pb.h"
 #include "services/common/replica_channel.h"
 #include "services/store/remote_store.h"
 #include "store/checkpoint_import.h"
@@ -143,6 +144,43 @@ void expect_no_error_while_a_replica_dies(int port_a, int port_b,
   EXPECT_EQ(errors, 0) << first_error;
   EXPECT_EQ(answers_after_kill, 400);
   EXPECT_EQ(answers, 600);
+}
+
+// The robot controller has no store of its own: with --store its audit (every robot call)
+// lands in the platform's one table, with the lease id redacted.
+TEST(StoreTopology, TheRobotControllersAuditReachesTheStore) {
+  Topology topology("store_topology_robot_audit");
+  const auto own = topology.dir().path() / "robot-sim";
+  std::filesystem::create_directories(own);
+  ChildProcess robot("robot-sim",
+                     {PNP_BIN_DIR "/pnp-robot-sim", "--address", "127.0.0.1:0", "--clock",
+                      "lockstep", "--store", loopback(topology.store_port())},
+                     topology.dir().path(), std::vector<std::pair<std::string, std::string>>{},
+                     own);
+  ASSERT_GT(robot.port(), 0) << robot.diagnostics();
+  auto stub = robot::v1::RobotControllerService::NewStub(
+      grpc::CreateChannel(loopback(robot.port()), grpc::InsecureChannelCredentials()));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + kGuard);
+  robot::v1::AcquireLeaseRequest request;
+  request.set_client_name("audited");
+  robot::v1::AcquireLeaseResponse response;
+  ASSERT_TRUE(stub->AcquireLease(&context, request, &response).ok());
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return StoreReader(topology.db())
+                   .text(
+                       "SELECT COUNT(*) FROM audit WHERE service = 'robot_sim' AND rpc LIKE "
+                       "'%/AcquireLease' AND code = 'OK'") == "1";
+      },
+      kGuard, 20ms))
+      << robot.diagnostics();
+  EXPECT_EQ(
+      StoreReader(topology.db())
+          .text("SELECT COUNT(*) FROM audit WHERE request LIKE '%" + response.lease_id() + "%'"),
+      "0")
+      << "a lease id was written to the audit";
+  EXPECT_TRUE(std::filesystem::is_empty(own)) << "the controller wrote a file of its own";
 }
 
 TEST(StoreTopology, InferenceReplicasFollowAPromotionAndABalancedClientRidesOutAKilledOne) {
