@@ -25,3 +25,8 @@ def from_rpc_error(error: grpc.RpcError, method: str, address: str) -> PlatformE
     code = error.code() if hasattr(error, "code") else grpc.StatusCode.UNKNOWN
     details = error.details() if hasattr(error, "details") else str(error)
     return PlatformError(method, address, code, details or "")
+
+
+class ReplyError(RuntimeError):
+    """A reply whose shape is not the protocol's (a count or a vector's size): a server of
+    another version, or one that misbehaves. Raised before anything is built from it."""

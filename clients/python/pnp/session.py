@@ -10,7 +10,7 @@ import grpc
 import numpy as np
 
 from pnp import names
-from pnp.errors import PlatformError, from_rpc_error
+from pnp.errors import PlatformError, ReplyError, from_rpc_error
 from pnp.policy.v1 import policy_service_pb2 as policy
 from pnp.sim_client import GOAL_SIZE, OBSERVATION_SIZE, vector3
 from pnp.common.v1 import common_pb2 as common
@@ -70,6 +70,10 @@ class Session:
             self._abandon()
             raise
         p = answer.prediction
+        if len(p.subtask_probabilities) not in (0, 3):  # none from an end-to-end policy
+            self._abandon()
+            raise ReplyError(f"PredictSession reply subtask_probabilities: expected 0 or 3, got "
+                             f"{len(p.subtask_probabilities)} (a newer or older platform?)")
         return Prediction(
             action=np.array([p.action.dx, p.action.dy, p.action.dz, p.action.gripper]),
             subtask=names.to_name(names.SUBTASKS, p.subtask),

@@ -107,14 +107,14 @@ class SimBatch:
         if seed is not None:
             action_space.seed(int(seed))
         try:
-            return self.client.reset(env_id)
+            return self.client.reset(env_id, self.count)
         except PlatformError as e:
             if e.code != grpc.StatusCode.NOT_FOUND:
                 raise
             # Expired on the service (idle longer than its idle timeout): a new batch,
             # whose episodes start again from the seed's first.
             self._env_id = None
-            return self.client.reset(self.env_id())
+            return self.client.reset(self.env_id(), self.count)
 
     def started(self) -> bool:
         return self._env_id is not None

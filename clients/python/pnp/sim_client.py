@@ -11,7 +11,7 @@ import numpy as np
 from pnp import names
 from pnp.common.v1 import common_pb2 as common
 from pnp.endpoints import Endpoints
-from pnp.errors import from_rpc_error
+from pnp.errors import ReplyError, from_rpc_error
 from pnp.sim.v1 import sim_service_pb2 as sim
 from pnp.sim.v1 import sim_service_pb2_grpc as sim_grpc
 
@@ -21,7 +21,15 @@ ACTION_SIZE = 4
 OBJECT_POSITION = slice(3, 6)  # docs/OBSERVATION.md: the achieved goal of the task
 
 
+def checked_count(items, expected: int, what: str) -> list:
+    if len(items) != expected:
+        raise ReplyError(f"{what}: expected {expected}, got {len(items)} (a newer or older "
+                         f"platform?)")
+    return list(items)
+
+
 def observation_dict(state: sim.EnvState) -> dict[str, np.ndarray]:
+    checked_count(state.observation.values, OBSERVATION_SIZE, "reply observation values")
     observation = np.array(state.observation.values, dtype=np.float64)
     g = state.episode_goal
     return {
@@ -78,9 +86,11 @@ class SimClient:
             request.idle_timeout.FromNanoseconds(int(idle_timeout_s * 1e9))
         return self._call("CreateEnv", request).env_id
 
-    def reset(self, env_id: str, indices: Sequence[int] = ()) -> list[sim.EnvState]:
+    def reset(self, env_id: str, count: int, indices: Sequence[int] = ()) -> list[sim.EnvState]:
+        """The states of the environments `indices` (empty: all `count` of the batch)."""
         request = sim.ResetRequest(env_id=env_id, indices=list(indices))
-        return list(self._call("Reset", request).states)
+        return checked_count(self._call("Reset", request).states,
+                             len(indices) if indices else count, "Reset reply states")
 
     def step_task(self, env_id: str, actions: np.ndarray, goals: Sequence[np.ndarray],
                   indices: Sequence[int]) -> list[sim.StepResult]:
@@ -91,13 +101,16 @@ class SimClient:
                 index=int(k),
                 action=common.Action(dx=action[0], dy=action[1], dz=action[2], gripper=action[3]),
                 goal=vector3(goal), objective=sim.OBJECTIVE_TASK))
-        return list(self._call("Step", request).results)
+        return checked_count(self._call("Step", request).results, len(request.actions),
+                             "Step reply results")
 
     def compute_reward(self, achieved, goals) -> np.ndarray:
         """The service's dense reward -||achieved - goal|| for pairs of shape (n, 3)."""
         request = sim.ComputeRewardRequest(achieved=[vector3(a) for a in achieved],
                                            goals=[vector3(g) for g in goals])
-        return np.array(self._call("ComputeReward", request).rewards, dtype=np.float64)
+        rewards = checked_count(self._call("ComputeReward", request).rewards, len(request.goals),
+                                "ComputeReward reply rewards")
+        return np.array(rewards, dtype=np.float64)
 
     def spec(self, robot: str, object: str, world: str,
              actuation: str = "default") -> sim.GetEnvSpecResponse:

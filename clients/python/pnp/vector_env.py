@@ -80,7 +80,7 @@ class VectorPickAndPlaceEnv:
                 info["final_info"][k] = {"is_success": info["is_success"][k],
                                          "elapsed_steps": int(info["elapsed_steps"][k]),
                                          "physics_fault": info["physics_fault"][k]}
-            for k, state in zip(finished, client.reset(env_id, finished)):
+            for k, state in zip(finished, client.reset(env_id, self.num_envs, finished)):
                 fresh = observation_dict(state)
                 for key in obs:
                     obs[key][k] = fresh[key]

@@ -146,7 +146,7 @@ def test_close_releases_the_services_environment(sim_server):
     client = SimClient(pnp.Endpoints(sim=sim_server.address))
     try:
         with pytest.raises(pnp.PlatformError) as e:
-            client.reset(env_id)
+            client.reset(env_id, 1)
         assert e.value.code == grpc.StatusCode.NOT_FOUND
     finally:
         client.close()
@@ -246,3 +246,16 @@ def test_an_arm_actuated_fetch_is_refused_naming_actuation(sim_server):
     assert "actuation" in e.value.details
     with pytest.raises(ValueError, match="actuation: expected one of default, mocap, arm"):
         pnp.PickAndPlaceEnv(sim_server.address, robot="panda", actuation="teleport")
+
+
+def test_a_reply_of_the_wrong_shape_is_refused_before_use():
+    from pnp.sim.v1 import sim_service_pb2 as sim
+    from pnp.sim_client import checked_count, observation_dict
+    state = sim.EnvState()
+    state.observation.values.extend([0.0] * 24)
+    with pytest.raises(pnp.ReplyError, match="reply observation values: expected 25, got 24"):
+        observation_dict(state)
+    state.observation.values.append(0.0)
+    assert observation_dict(state)["observation"].shape == (25,)
+    with pytest.raises(pnp.ReplyError, match="Step reply results: expected 2, got 1"):
+        checked_count([object()], 2, "Step reply results")
