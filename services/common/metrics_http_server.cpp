@@ -11,7 +11,10 @@
 #include <array>
 #include <cerrno>
 #include <memory>
+#include <string>
 #include <system_error>
+#include <thread>
+#include <vector>
 
 #include "common/error.h"
 
@@ -19,9 +22,7 @@ namespace pnp::services {
 namespace {
 
 constexpr std::size_t kMaxRequestBytes = 8192;  // a scrape's request is a few hundred
-constexpr std::chrono::seconds kReadTimeout{2};
-constexpr std::chrono::seconds kWriteTimeout{5};
-constexpr std::chrono::milliseconds kLingerTimeout{500};
+using Clock = std::chrono::steady_clock;
 
 std::string errno_text(int error) {
   return std::generic_category().message(error);
@@ -47,6 +48,17 @@ HostPort split_address(const std::string& address) {
       std::stoi(out.port) > 65535)
     refuse();
   return out;
+}
+
+// The peer's address without its port: what the per-peer connection cap counts.
+std::string peer_of(const sockaddr_storage& storage) {
+  std::array<char, INET6_ADDRSTRLEN> text{};
+  const void* address =
+      storage.ss_family == AF_INET6
+          ? static_cast<const void*>(&reinterpret_cast<const sockaddr_in6*>(&storage)->sin6_addr)
+          : static_cast<const void*>(&reinterpret_cast<const sockaddr_in*>(&storage)->sin_addr);
+  if (::inet_ntop(storage.ss_family, address, text.data(), text.size()) == nullptr) return "?";
+  return text.data();
 }
 
 int bound_port(int fd) {
@@ -109,8 +121,25 @@ std::string plain(std::string_view status, std::string_view extra_headers = {}) 
 
 }  // namespace
 
-MetricsHttpServer::MetricsHttpServer(const std::string& address, const MetricsRegistry& registry)
-    : registry_(registry), listener_(listen_on(address)) {
+struct MetricsHttpServer::Connection {
+  enum class Phase { kReading, kWriting, kLingering };
+  UniqueFd fd;
+  std::string peer;
+  Phase phase = Phase::kReading;
+  std::string in;   // the request head so far
+  std::string out;  // the answer
+  std::size_t sent = 0;
+  std::size_t drained = 0;
+  Clock::time_point deadline;
+};
+
+MetricsHttpServer::MetricsHttpServer(const std::string& address, const MetricsRegistry& registry,
+                                     MetricsHttpLimits limits)
+    : registry_(registry), limits_(limits), listener_(listen_on(address)) {
+  if (limits_.max_connections <= 0 || limits_.max_connections_per_peer <= 0)
+    throw_invalid_argument("metrics limits", "positive connection caps",
+                           std::to_string(limits_.max_connections) + ", " +
+                               std::to_string(limits_.max_connections_per_peer));
   port_ = bound_port(listener_.get());
   std::array<int, 2> pipe_fds{};
   if (::pipe2(pipe_fds.data(), O_CLOEXEC | O_NONBLOCK) != 0)
@@ -129,104 +158,128 @@ MetricsHttpServer::~MetricsHttpServer() {
 }
 
 void MetricsHttpServer::run(const std::stop_token& stop) {
+  std::vector<Connection> open;
+  std::vector<pollfd> fds;
   while (!stop.stop_requested()) {
-    std::array<pollfd, 2> fds{{{listener_.get(), POLLIN, 0}, {wake_read_.get(), POLLIN, 0}}};
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
+    // The listener only while a slot is free: a full server leaves new clients queued.
+    fds.clear();
+    const bool room = static_cast<int>(open.size()) < limits_.max_connections;
+    fds.push_back({wake_read_.get(), POLLIN, 0});
+    fds.push_back({room ? listener_.get() : -1, POLLIN, 0});
+    auto next_deadline = Clock::time_point::max();
+    for (const Connection& c : open) {
+      const short events = c.phase == Connection::Phase::kWriting ? POLLOUT : POLLIN;
+      fds.push_back({c.fd.get(), events, 0});
+      next_deadline = std::min(next_deadline, c.deadline);
+    }
+    int timeout_ms = -1;
+    if (next_deadline != Clock::time_point::max()) {
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(next_deadline - Clock::now());
+      timeout_ms = static_cast<int>(std::clamp<long long>(left.count() + 1, 0, 60'000));
+    }
+    if (::poll(fds.data(), fds.size(), timeout_ms) < 0) {
       if (errno == EINTR) continue;
       return;
     }
-    if (fds[1].revents != 0) return;
-    if ((fds[0].revents & POLLIN) == 0) continue;
-    const UniqueFd client(
-        ::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
-    if (client.valid()) {
-      serve(client.get());
-    } else if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
-      // Out of descriptors or memory: back off instead of spinning on the ready listener.
-      wait_for(-1, 0, std::chrono::steady_clock::now() + std::chrono::milliseconds(100));
+    if (fds[0].revents != 0) return;
+    // Connections first (their pollfds follow the two fixed ones), then new clients.
+    const auto now = Clock::now();
+    std::vector<Connection> still_open;
+    still_open.reserve(open.size());
+    for (std::size_t k = 0; k < open.size(); ++k) {
+      Connection& c = open[k];
+      const bool keep = fds[k + 2].revents != 0 ? advance(c) : true;
+      // Past its deadline (advance() sets a new one when the phase changes): closed.
+      if (keep && now < c.deadline) still_open.push_back(std::move(c));
     }
+    open = std::move(still_open);
+    if ((fds[1].revents & POLLIN) != 0) accept_all(open);
   }
 }
 
-bool MetricsHttpServer::wait_for(int fd, short events,
-                                 std::chrono::steady_clock::time_point deadline) const {
-  for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-        deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) return false;
-    std::array<pollfd, 2> fds{{{fd, events, 0}, {wake_read_.get(), POLLIN, 0}}};
-    const int ready = ::poll(fds.data(), fds.size(), static_cast<int>(left.count()));
-    if (ready < 0 && errno == EINTR) continue;
-    if (ready <= 0 || fds[1].revents != 0) return false;
-    return fds[0].revents != 0;  // ready, or an error the next call reports
-  }
-}
-
-void MetricsHttpServer::serve(int client) const {
-  // Read the request head (request line and headers) within the cap and the deadline.
-  std::string request;
-  const auto read_deadline = std::chrono::steady_clock::now() + kReadTimeout;
-  std::string answer;
-  while (answer.empty() && request.find("\r\n\r\n") == std::string::npos) {
-    if (request.size() > kMaxRequestBytes) {
-      answer = plain("431 Request Header Fields Too Large");
-      break;
-    }
-    if (!wait_for(client, POLLIN, read_deadline)) return;
-    std::array<char, 2048> buffer{};
-    const auto n = ::recv(client, buffer.data(), buffer.size(), 0);
-    if (n == 0) return;  // the client left
-    if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;
-      return;
-    }
-    request.append(buffer.data(), static_cast<std::size_t>(n));
-  }
-
-  if (answer.empty()) {
-    // "METHOD SP target SP HTTP/1.x"
-    const std::string_view line = std::string_view(request).substr(0, request.find("\r\n"));
-    const auto first_space = line.find(' ');
-    const auto second_space = line.find(' ', first_space == line.npos ? 0 : first_space + 1);
-    if (first_space == line.npos || second_space == line.npos ||
-        !line.substr(second_space + 1).starts_with("HTTP/1.")) {
-      answer = plain("400 Bad Request");
-    } else {
-      const std::string_view method = line.substr(0, first_space);
-      std::string_view target = line.substr(first_space + 1, second_space - first_space - 1);
-      target = target.substr(0, target.find('?'));
-      if (method != "GET") {
-        answer = plain("405 Method Not Allowed", "Allow: GET\r\n");
-      } else if (target != "/metrics") {
-        answer = plain("404 Not Found");
-      } else {
-        answer = response("200 OK", "text/plain; version=0.0.4; charset=utf-8", registry_.render());
+void MetricsHttpServer::accept_all(std::vector<Connection>& open) const {
+  while (static_cast<int>(open.size()) < limits_.max_connections) {
+    sockaddr_storage storage{};
+    socklen_t length = sizeof storage;
+    UniqueFd client(::accept4(listener_.get(), reinterpret_cast<sockaddr*>(&storage), &length,
+                              SOCK_CLOEXEC | SOCK_NONBLOCK));
+    if (!client.valid()) {
+      if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+        // Out of descriptors or memory: let the open connections finish first.
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
       }
+      return;  // EAGAIN: none left to accept
     }
+    std::string peer = peer_of(storage);
+    const auto same_peer = std::count_if(open.begin(), open.end(),
+                                         [&](const Connection& c) { return c.peer == peer; });
+    if (same_peer >= limits_.max_connections_per_peer) continue;  // closed at once
+    Connection c;
+    c.fd = std::move(client);
+    c.peer = std::move(peer);
+    c.deadline = Clock::now() + limits_.header_deadline;
+    open.push_back(std::move(c));
   }
+}
 
-  const auto write_deadline = std::chrono::steady_clock::now() + kWriteTimeout;
-  std::size_t sent = 0;
-  while (sent < answer.size()) {
-    if (!wait_for(client, POLLOUT, write_deadline)) return;
-    const auto n = ::send(client, answer.data() + sent, answer.size() - sent, MSG_NOSIGNAL);
-    if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;
-      return;
-    }
-    sent += static_cast<std::size_t>(n);
-  }
-  // Half-close, then read what the client still sends until it closes: closing with
-  // unread input would reset the connection and could cut the answer short.
-  ::shutdown(client, SHUT_WR);
-  const auto linger_deadline = std::chrono::steady_clock::now() + kLingerTimeout;
+bool MetricsHttpServer::advance(Connection& c) const {
   std::array<char, 2048> buffer{};
-  for (std::size_t drained = 0; drained <= kMaxRequestBytes;) {
-    if (!wait_for(client, POLLIN, linger_deadline)) return;
-    const auto n = ::recv(client, buffer.data(), buffer.size(), 0);
-    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) return;
-    if (n > 0) drained += static_cast<std::size_t>(n);
+  switch (c.phase) {
+    case Connection::Phase::kReading: {
+      const auto n = ::recv(c.fd.get(), buffer.data(), buffer.size(), 0);
+      if (n == 0) return false;  // the client left
+      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      c.in.append(buffer.data(), static_cast<std::size_t>(n));
+      if (c.in.size() > kMaxRequestBytes) {
+        c.out = plain("431 Request Header Fields Too Large");
+      } else if (c.in.find("\r\n\r\n") != std::string::npos) {
+        c.out = answer(c.in);
+      } else {
+        return true;  // more to come, within the header deadline
+      }
+      c.phase = Connection::Phase::kWriting;
+      c.deadline = Clock::now() + limits_.write_deadline;
+      return true;
+    }
+    case Connection::Phase::kWriting: {
+      const auto n = ::send(c.fd.get(), c.out.data() + c.sent, c.out.size() - c.sent, MSG_NOSIGNAL);
+      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      c.sent += static_cast<std::size_t>(n);
+      if (c.sent < c.out.size()) return true;
+      // Half-close, then read what the client still sends until it closes: closing with
+      // unread input would reset the connection and could cut the answer short.
+      ::shutdown(c.fd.get(), SHUT_WR);
+      c.phase = Connection::Phase::kLingering;
+      c.deadline = Clock::now() + limits_.linger;
+      return true;
+    }
+    case Connection::Phase::kLingering: {
+      const auto n = ::recv(c.fd.get(), buffer.data(), buffer.size(), 0);
+      if (n == 0) return false;
+      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      c.drained += static_cast<std::size_t>(n);
+      return c.drained <= kMaxRequestBytes;
+    }
   }
+  return false;
+}
+
+std::string MetricsHttpServer::answer(const std::string& request) const {
+  // "METHOD SP target SP HTTP/1.x"
+  const std::string_view line = std::string_view(request).substr(0, request.find("\r\n"));
+  const auto first_space = line.find(' ');
+  const auto second_space = line.find(' ', first_space == line.npos ? 0 : first_space + 1);
+  if (first_space == line.npos || second_space == line.npos ||
+      !line.substr(second_space + 1).starts_with("HTTP/1.")) {
+    return plain("400 Bad Request");
+  }
+  const std::string_view method = line.substr(0, first_space);
+  std::string_view target = line.substr(first_space + 1, second_space - first_space - 1);
+  target = target.substr(0, target.find('?'));
+  if (method != "GET") return plain("405 Method Not Allowed", "Allow: GET\r\n");
+  if (target != "/metrics") return plain("404 Not Found");
+  return response("200 OK", "text/plain; version=0.0.4; charset=utf-8", registry_.render());
 }
 
 }  // namespace pnp::services

@@ -7,6 +7,8 @@
 #include <sys/socket.h>
 
 #include <array>
+#include <cerrno>
+#include <chrono>
 #include <string>
 #include <thread>
 #include <vector>
@@ -189,6 +191,67 @@ TEST(MetricsHttpServer, StopsWithASilentClientConnected) {
   ASSERT_EQ(::connect(silent.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address),
             0);
   server.reset();  // must return although the client never sends a byte
+}
+
+// A loopback connection that sends `head` (an unfinished request) and then waits.
+UniqueFd slow_client(int port, const std::string& head) {
+  UniqueFd fd(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0));
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  EXPECT_EQ(::connect(fd.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+  if (!head.empty()) {
+    EXPECT_EQ(::send(fd.get(), head.data(), head.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(head.size()));
+  }
+  return fd;
+}
+
+// Still open and unanswered: nothing to read yet, no end of stream.
+bool waiting(const UniqueFd& fd) {
+  std::array<char, 16> buffer{};
+  const auto n = ::recv(fd.get(), buffer.data(), buffer.size(), MSG_DONTWAIT);
+  return n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK);
+}
+
+// Slow and silent clients are served beside a scrape, not before it: twelve connections
+// that never finish their request head (a deadline longer than the test) are all still
+// open and unanswered when the scrape has been answered.
+TEST(MetricsHttpServer, SlowClientsNeverHoldUpAScrape) {
+  MetricsRegistry r;
+  r.counter("x_total", "X.").Increment();
+  MetricsHttpLimits limits;
+  limits.header_deadline = std::chrono::minutes(10);
+  limits.max_connections_per_peer = 16;
+  MetricsHttpServer server("127.0.0.1:0", r, limits);
+  std::vector<UniqueFd> slow;
+  for (int k = 0; k < 12; ++k)
+    slow.push_back(slow_client(server.port(), k % 2 == 0 ? "" : "GET /metrics HTTP/1.1\r\n"));
+  const std::string ok = http(server.port(), "GET /metrics HTTP/1.1\r\n\r\n");
+  EXPECT_TRUE(ok.starts_with("HTTP/1.1 200 OK\r\n")) << ok;
+  for (const auto& fd : slow) EXPECT_TRUE(waiting(fd));
+}
+
+// One address cannot take every slot: past its share, its next connection is closed at
+// once (unanswered), and another of its connections is served once a slot of its frees.
+TEST(MetricsHttpServer, OnePeerHoldsAtMostItsShareOfConnections) {
+  MetricsRegistry r;
+  MetricsHttpLimits limits;
+  limits.header_deadline = std::chrono::minutes(10);
+  limits.max_connections_per_peer = 4;
+  MetricsHttpServer server("127.0.0.1:0", r, limits);
+  std::vector<UniqueFd> held;
+  for (int k = 0; k < 4; ++k) held.push_back(slow_client(server.port(), ""));
+  EXPECT_EQ(http(server.port(), "GET /metrics HTTP/1.1\r\n\r\n"), "") << "a fifth was served";
+  for (const auto& fd : held) EXPECT_TRUE(waiting(fd));
+  held.pop_back();  // closes one: its slot frees once the server sees it
+  std::string ok;
+  for (int attempt = 0; attempt < 100 && !ok.starts_with("HTTP/1.1 200"); ++attempt) {
+    ok = http(server.port(), "GET /metrics HTTP/1.1\r\n\r\n");
+    if (!ok.starts_with("HTTP/1.1 200")) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_TRUE(ok.starts_with("HTTP/1.1 200 OK\r\n")) << ok;
 }
 
 TEST(MetricsHttpServer, RefusesBadAddressesNamingThem) {
