@@ -96,7 +96,7 @@ void validate(const Options& o) {
       throw_invalid_argument("--extra-adapt", "approach, manipulate, retract or hlc (or none)", r);
   }
   if (o.gateway_seed < 880000)
-    throw_invalid_argument("--gateway-seed", "a held-out seed >= 880000 (never trained on)",
+    throw_invalid_argument("--gateway-seed", "a scene seed >= 880000 (never trained on)",
                            std::to_string(o.gateway_seed));
 }
 
@@ -263,8 +263,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", o.seed, "training seed (every role)")->capture_default_str();
   app.add_option("--episodes", o.episodes, "gateway episodes per cell")->capture_default_str();
-  app.add_option("--gateway-seed", o.gateway_seed,
-                 "first gateway episode's scene seed (held out: >= 880000)")
+  app.add_option(
+         "--gateway-seed", o.gateway_seed,
+         "first gateway episode's scene seed (>= 880000, never trained on; the held-out scenes: "
+         "docs/results/HELD_OUT.md)")
       ->capture_default_str();
   app.add_option("--shapes", o.shapes,
                  "new shapes (block is the trained one); none: the block alone")
