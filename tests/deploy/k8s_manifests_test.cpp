@@ -3,10 +3,16 @@
 // invariants: one writer of the one volume, probes and limits on every server, Services
 // that select Pods listening on their ports, flags and ports that agree, autoscaling and
 // disruption budgets on real workloads, network policies that allow exactly the edges the
-// servers' flags need, and a single-node overlay whose requests fit its node.
+// servers' flags need, and a single-node overlay whose requests fit its node. Least
+// privilege: each Pod mounts its own identity's Secret only (the ops Secret only the
+// pipeline Job), serves and calls as that identity, no object names the CA key, and the
+// README makes each Secret from its own bundle.
+#include <fnmatch.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "tests/deploy/manifest_objects.h"
 
@@ -48,6 +54,81 @@ class Overlay : public ::testing::TestWithParam<std::string> {
     for (const YAML::Node& s : services_)
       if (s["metadata"]["name"].as<std::string>() == name) return &s;
     return nullptr;
+  }
+
+  const YAML::Node* config_map(const std::string& name) const {
+    for (const YAML::Node& object : objects_)
+      if (object["kind"].as<std::string>() == "ConfigMap" &&
+          object["metadata"]["name"].as<std::string>() == name)
+        return &object;
+    return nullptr;
+  }
+  // A container's environment as the kubelet sets it: its envFrom ConfigMaps, then env.
+  std::map<std::string, std::string> environment_of(const YAML::Node& container) const {
+    std::map<std::string, std::string> out;
+    for (const YAML::Node& from : list(container, "envFrom")) {
+      if (!from["configMapRef"]) continue;
+      if (const YAML::Node* map = config_map(from["configMapRef"]["name"].as<std::string>()))
+        for (const auto& entry : (*map)["data"])
+          out[entry.first.as<std::string>()] = entry.second.as<std::string>();
+    }
+    for (const YAML::Node& e : list(container, "env"))
+      if (e["value"]) out[e["name"].as<std::string>()] = e["value"].as<std::string>();
+    return out;
+  }
+  // The Secrets (kind "Secret") or ConfigMaps a workload's Pods read: volumes (projected
+  // too), envFrom, env valueFrom.
+  std::set<std::string> referenced(const Workload& w, const std::string& kind) const {
+    const bool secret = kind == "Secret";
+    const char* volume_key = secret ? "secret" : "configMap";
+    const char* name_key = secret ? "secretName" : "name";
+    std::set<std::string> out;
+    for (const YAML::Node& v : list(w.pod_spec, "volumes")) {
+      if (v[volume_key]) out.insert(v[volume_key][name_key].as<std::string>());
+      if (v["projected"])
+        for (const YAML::Node& source : list(v["projected"], "sources"))
+          if (source[volume_key]) out.insert(source[volume_key]["name"].as<std::string>());
+    }
+    for (const char* containers : {"containers", "initContainers"}) {
+      for (const YAML::Node& c : list(w.pod_spec, containers)) {
+        for (const YAML::Node& from : list(c, "envFrom"))
+          if (from[secret ? "secretRef" : "configMapRef"])
+            out.insert(from[secret ? "secretRef" : "configMapRef"]["name"].as<std::string>());
+        for (const YAML::Node& e : list(c, "env")) {
+          const char* ref = secret ? "secretKeyRef" : "configMapKeyRef";
+          if (e["valueFrom"] && e["valueFrom"][ref])
+            out.insert(e["valueFrom"][ref]["name"].as<std::string>());
+        }
+      }
+    }
+    return out;
+  }
+  // The items of a list field; none when it is absent.
+  static std::vector<YAML::Node> list(const YAML::Node& map, const char* field) {
+    std::vector<YAML::Node> out;
+    if (map && map.IsMap() && map[field] && map[field].IsSequence())
+      for (const auto& item : map[field]) out.push_back(item);
+    return out;
+  }
+  // Everything a workload's Pods are given: their template and the rendered ConfigMaps
+  // they read.
+  std::vector<std::string> holdings(const Workload& w) const {
+    std::vector<std::string> out = scalars(w.object["spec"]["template"]);
+    for (const std::string& name : referenced(w, "ConfigMap"))
+      if (const YAML::Node* map = config_map(name))
+        for (const std::string& text : scalars(*map)) out.push_back(text);
+    return out;
+  }
+  // Where a container mounts the volume made from Secret `secret`; empty if it does not.
+  static std::string mount_of(const Workload& w, const YAML::Node& container,
+                              const std::string& secret) {
+    for (const YAML::Node& v : list(w.pod_spec, "volumes")) {
+      if (!v["secret"] || v["secret"]["secretName"].as<std::string>() != secret) continue;
+      for (const YAML::Node& mount : list(container, "volumeMounts"))
+        if (mount["name"].as<std::string>() == v["name"].as<std::string>())
+          return mount["mountPath"].as<std::string>();
+    }
+    return "";
   }
 
   std::vector<YAML::Node> objects_;
@@ -274,6 +355,72 @@ TEST_P(Overlay, EveryContainerRunsTheOneImage) {
   EXPECT_EQ(images.size(), 1u) << "the Job and the servers must run the same build";
 }
 
+// Breaking into one Pod must not yield the CA key (hence any identity): no object names it.
+TEST_P(Overlay, NoObjectNamesTheCaKey) {
+  for (const YAML::Node& object : objects_)
+    EXPECT_FALSE(files_named(scalars(object), "key").contains("ca"))
+        << object["kind"].as<std::string>() << " " << object["metadata"]["name"].as<std::string>();
+}
+
+// Each Pod mounts one Secret, its own identity's (pnp-identity-NAME), and names no file of
+// another identity; only the pipeline Job has the ops (operator) credentials.
+TEST_P(Overlay, EachPodHoldsItsOwnIdentityAndNoOther) {
+  std::set<std::string> with_ops;
+  for (const Workload& w : workloads_) {
+    const auto identity = workload_identities().find(w.name);
+    ASSERT_NE(identity, workload_identities().end())
+        << w.name << ": give it an identity (tests/deploy/manifest_objects.cpp)";
+    const std::string& own = identity->second;
+    EXPECT_EQ(referenced(w, "Secret"), std::set<std::string>{"pnp-identity-" + own})
+        << w.name << " must mount its own identity's Secret and no other";
+    const auto held = holdings(w);
+    for (const std::string& key : files_named(held, "key"))
+      EXPECT_EQ(key, own) << w.name << " names " << key << ".key";
+    for (const std::string& token : files_named(held, "token"))
+      EXPECT_EQ(token, own) << w.name << " names " << token << ".token";
+    for (const std::string& certificate : files_named(held, "pem"))
+      EXPECT_TRUE(certificate == own || certificate == "ca")
+          << w.name << " names " << certificate << ".pem";
+    if (referenced(w, "Secret").contains("pnp-identity-ops") ||
+        files_named(held, "key").contains("ops"))
+      with_ops.insert(w.name);
+  }
+  EXPECT_EQ(with_ops, std::set<std::string>{"pnp-pipeline"}) << "operator credentials";
+}
+
+// Each server serves with its own certificate from its own Secret, and its probes, store
+// client and simulation client present the same identity; the pipeline calls as ops.
+TEST_P(Overlay, EachServerServesWithItsOwnCertificateAndCallsAsItself) {
+  int servers = 0;
+  for_each_container([&](const Workload& w, const YAML::Node& c) {
+    const std::string own = workload_identities().at(w.name);
+    const std::string dir = mount_of(w, c, "pnp-identity-" + own);
+    ASSERT_FALSE(dir.empty()) << w.name << " does not mount pnp-identity-" << own;
+    const auto env = environment_of(c);
+    const auto variable = [&](const std::string& key) {
+      return env.contains(key) ? env.at(key) : std::string("(unset)");
+    };
+    const auto line = command_line(c);
+    std::vector<std::string> clients = {"PNP_TLS"};  // the probes' pnpctl, or the Job's
+    if (flag(line, "--address")) {
+      ++servers;
+      EXPECT_EQ(flag(line, "--tls-cert").value_or(variable("PNP_SERVER_TLS_CERT")),
+                dir + "/" + own + ".pem")
+          << w.name << " does not serve with its own certificate";
+      EXPECT_EQ(flag(line, "--tls-key").value_or(variable("PNP_SERVER_TLS_KEY")),
+                dir + "/" + own + ".key")
+          << w.name;
+    }
+    if (flag(line, "--store")) clients.push_back("PNP_STORE_TLS");
+    if (flag(line, "--sim-address")) clients.push_back("PNP_SIM_TLS");
+    for (const std::string& client : clients) {
+      EXPECT_EQ(variable(client + "_CERT"), dir + "/" + own + ".pem") << w.name << " " << client;
+      EXPECT_EQ(variable(client + "_KEY"), dir + "/" + own + ".key") << w.name << " " << client;
+    }
+  });
+  EXPECT_EQ(servers, 8);  // store, sim, five trainers, inference
+}
+
 INSTANTIATE_TEST_SUITE_P(K8s, Overlay, ::testing::Values("single-node", "cluster"),
                          [](const auto& overlay) {
                            std::string name = overlay.param;
@@ -304,6 +451,74 @@ TEST(SingleNodeOverlay, RequestsFitItsNode) {
   std::printf("[ measured ] single-node requests: %lld mCPU, %lld MiB\n", cpu, memory);
   EXPECT_LE(cpu, 1500);
   EXPECT_LE(memory, 3072);
+}
+
+// deploy/README.md's steps: each identity Secret is made from that identity's bundle
+// (dev-certs/bundles/NAME/, which never holds the CA key), every Secret and ConfigMap a Pod
+// needs that the overlays do not render is made there, and no step hands out or exposes
+// dev-certs/ca.key (a whole dev-certs/ folder, or a glob that matches it).
+TEST(DeployReadme, MakesEachSecretFromItsOwnBundleAndNeverHandsOutTheCaKey) {
+  std::ifstream in(std::filesystem::path(PNP_SOURCE_DIR) / "deploy" / "README.md");
+  std::set<std::string> made;
+  for (std::string text; std::getline(in, text);) {
+    std::istringstream split(text);
+    std::vector<std::string> words;
+    for (std::string word; split >> word;) words.push_back(word);
+    for (std::string word : words) {
+      if (word.starts_with("--from-file=")) word = word.substr(12);
+      if (const auto equals = word.find('='); equals != std::string::npos && !word.starts_with("-"))
+        word = word.substr(equals + 1);  // --from-file=KEY=PATH
+      word.erase(0, word.find_first_not_of("`"));
+      if (!word.starts_with("dev-certs")) continue;
+      const bool whole_folder = word == "dev-certs" || word == "dev-certs/";
+      EXPECT_FALSE(whole_folder && text.find("make-dev-certs") == std::string::npos)
+          << "the whole dev-certs folder holds ca.key: " << text;
+      EXPECT_NE(::fnmatch(word.c_str(), "dev-certs/ca.key", FNM_PATHNAME), 0)
+          << word << " takes in ca.key: " << text;
+    }
+    for (std::size_t k = 0; k + 3 < words.size(); ++k) {
+      if (words[k] != "create") continue;
+      const bool secret = words[k + 1] == "secret" && words[k + 2] == "generic";
+      if (!secret && words[k + 1] != "configmap") continue;
+      const std::string name = words[k + (secret ? 3 : 2)];
+      made.insert(name);
+      if (!secret) continue;
+      ASSERT_TRUE(name.starts_with("pnp-identity-")) << "a Secret of one identity: " << text;
+      const std::string bundle = "dev-certs/bundles/" + name.substr(13) + "/";
+      int sources = 0;
+      for (const std::string& word : words) {
+        if (!word.starts_with("--from-file=")) continue;
+        ++sources;
+        EXPECT_TRUE(word.substr(12).starts_with(bundle))
+            << name << " must be made from " << bundle << " only: " << text;
+      }
+      EXPECT_GT(sources, 0) << text;
+    }
+  }
+  // Every Secret or ConfigMap a Pod reads exists: rendered, or made by these steps.
+  for (const std::string overlay : {"single-node", "cluster"}) {
+    const Rendered rendered = kustomize(kK8s / "overlays" / overlay);
+    ASSERT_EQ(rendered.exit_code, 0) << rendered.errors;
+    auto objects = rendered.objects;
+    for (const YAML::Node& job : load_all(kK8s / "job-pipeline.yaml")) objects.push_back(job);
+    std::set<std::string> rendered_maps;
+    for (const YAML::Node& map : of_kind(objects, "ConfigMap"))
+      rendered_maps.insert(map["metadata"]["name"].as<std::string>());
+    for (const Workload& w : workloads(objects)) {
+      if (!w.pod_spec["volumes"]) continue;
+      for (const auto& v : w.pod_spec["volumes"]) {
+        if (v["secret"]) {
+          const auto name = v["secret"]["secretName"].as<std::string>();
+          EXPECT_TRUE(made.contains(name)) << w.name << " mounts " << name << ", made nowhere";
+        }
+        if (v["configMap"]) {
+          const auto name = v["configMap"]["name"].as<std::string>();
+          EXPECT_TRUE(made.contains(name) || rendered_maps.contains(name))
+              << w.name << " mounts " << name << ", made nowhere";
+        }
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 #include "tests/deploy/manifest_objects.h"
 
 #include <array>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -253,6 +255,107 @@ bool certificate_covers(const std::vector<std::string>& names, const std::string
     }
   }
   return false;
+}
+
+std::vector<std::string> scalars(const YAML::Node& node) {
+  std::vector<std::string> out;
+  const std::function<void(const YAML::Node&)> walk = [&](const YAML::Node& n) {
+    if (n.IsScalar()) {
+      out.push_back(n.as<std::string>());
+    } else if (n.IsSequence()) {
+      for (const auto& item : n) walk(item);
+    } else if (n.IsMap()) {
+      for (const auto& entry : n) {
+        walk(entry.first);
+        walk(entry.second);
+      }
+    }
+  };
+  walk(node);
+  return out;
+}
+
+std::set<std::string> files_named(const std::vector<std::string>& texts,
+                                  const std::string& extension) {
+  const std::string suffix = "." + extension;
+  const auto in_name = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '.' || c == '_' || c == '-';
+  };
+  std::set<std::string> out;
+  for (const std::string& text : texts) {
+    for (std::size_t begin = 0; begin < text.size();) {
+      std::size_t end = begin;
+      while (end < text.size() && in_name(text[end])) ++end;
+      const std::string word = text.substr(begin, end - begin);
+      if (word.size() > suffix.size() && word.ends_with(suffix))
+        out.insert(word.substr(0, word.size() - suffix.size()));
+      begin = end + 1;
+    }
+  }
+  return out;
+}
+
+CommandOutput run_command(const std::string& command) {
+  CommandOutput out;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen(command.c_str(), "r"), ::pclose);
+  if (!pipe) throw std::runtime_error("cannot run " + command);
+  std::array<char, 4096> buffer{};
+  for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), pipe.get())) > 0;)
+    out.out.append(buffer.data(), n);
+  const int status = ::pclose(pipe.release());
+  out.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
+
+const std::map<std::string, std::string>& compose_identities() {
+  static const std::map<std::string, std::string> identities = {{"store", "store"},
+                                                                {"sim", "sim"},
+                                                                {"approach", "approach"},
+                                                                {"manipulate", "manipulate"},
+                                                                {"retract", "retract"},
+                                                                {"hlc", "hlc"},
+                                                                {"e2e", "e2e"},
+                                                                {"inference", "inference"},
+                                                                {"robot-sim", "robot-sim"},
+                                                                {"dashboard", "dashboard"},
+                                                                {"gateway", "gateway"},
+                                                                {"pipeline", "ops"}};
+  return identities;
+}
+
+const std::map<std::string, std::string>& workload_identities() {
+  static const std::map<std::string, std::string> identities = {
+      {"pnp-store", "store"},       {"pnp-sim", "sim"},
+      {"pnp-approach", "approach"}, {"pnp-manipulate", "manipulate"},
+      {"pnp-retract", "retract"},   {"pnp-hlc", "hlc"},
+      {"pnp-e2e", "e2e"},           {"pnp-inference", "inference"},
+      {"pnp-pipeline", "ops"}};
+  return identities;
+}
+
+const std::map<std::string, std::set<std::string>>& identity_classes() {
+  static const std::set<std::string> trainer = {"reader", "agent", "service"};
+  static const std::map<std::string, std::set<std::string>> classes = {
+      {"store", {"reader"}},
+      {"sim", {"reader"}},
+      {"approach", trainer},
+      {"manipulate", trainer},
+      {"retract", trainer},
+      {"hlc", trainer},
+      {"e2e", trainer},
+      {"inference", {"reader", "service", "delegate"}},
+      {"robot-sim", {"reader", "service"}},
+      {"dashboard", {"reader", "agent"}},
+      {"gateway", {"reader", "agent", "robot"}},
+      {"ops", {"reader", "agent", "operator"}},
+      {"reader", {"reader"}},
+      {"trainer", trainer}};
+  return classes;
+}
+
+const std::set<std::string>& client_principals() {
+  static const std::set<std::string> clients = {"ops", "gateway", "trainer", "reader"};
+  return clients;
 }
 
 }  // namespace pnp::deploy_test

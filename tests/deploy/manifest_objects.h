@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,31 @@ std::optional<int> probed_port(const std::vector<std::string>& command, const st
 // whether one of them (exactly, or a one-label wildcard) covers `host`.
 std::vector<std::string> dev_certificate_names(const std::filesystem::path& script);
 bool certificate_covers(const std::vector<std::string>& names, const std::string& host);
+
+// Every scalar of a node at any depth, map keys included.
+std::vector<std::string> scalars(const YAML::Node& node);
+// The files of one kind that some text names ("/run/secrets/inference.key",
+// "../dev-certs/bundles/ops/ops.key", "--tls-key=x.key"): for extension "key", the stems
+// {"inference", "ops", "x"}.
+std::set<std::string> files_named(const std::vector<std::string>& texts,
+                                  const std::string& extension);
+
+// A shell command's stdout and exit code (its stderr goes where the test's goes).
+struct CommandOutput {
+  int exit_code = -1;
+  std::string out;
+};
+CommandOutput run_command(const std::string& command);
+
+// The deployment's identities (scripts/make-dev-certs; docs/RELIABILITY.md, "What each
+// identity may do"): the one each compose service and each Kubernetes workload holds, and
+// the classes the policy gives each. A service or workload missing here fails the tests
+// that ask, so a new one is given an identity on purpose.
+const std::map<std::string, std::string>& compose_identities();
+const std::map<std::string, std::string>& workload_identities();
+const std::map<std::string, std::set<std::string>>& identity_classes();
+// The client principals, which also have a token; every other identity is a server's.
+const std::set<std::string>& client_principals();
 
 // Whether the NetworkPolicies let a Pod labelled `client` (in the namespace) open a TCP
 // connection to `port` of a Pod labelled `server` (ingress rules, matchLabels selectors;
