@@ -119,7 +119,10 @@ Peer embedded_and_remote(const std::filesystem::path& root, const std::string& n
   };
   if (!remote_first) embedded();
   {
-    pnp::services::StoreServiceImpl service(remote_db.string());
+    // Storage is measured: any bytes are a checkpoint here, as in the embedded peer.
+    pnp::services::StoreServiceImpl service(
+        remote_db.string(),
+        [](std::string_view, std::span<const std::uint8_t>, std::string_view) {});
     pnp::services::ServerRuntime server({.address = "127.0.0.1:0",
                                          .max_message_bytes = pnp::services::kStoreMessageBytes,
                                          .services = {&service},

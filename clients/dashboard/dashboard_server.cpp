@@ -29,6 +29,14 @@ std::unique_ptr<store::Store> open_store(const DashboardConfig& config) {
       config.db, store::DatabaseOptions{.access = store::Access::kReadOnly});
 }
 
+// HttpOnly: no script reads it; Secure: HTTPS only (a policy needs TLS); Strict: never
+// sent from another site's page.
+std::string cookie(const char* name, const std::string& value, const char* path,
+                   std::chrono::seconds max_age) {
+  return std::string(name) + "=" + value + "; HttpOnly; Secure; SameSite=Strict; Path=" + path +
+         "; Max-Age=" + std::to_string(max_age.count());
+}
+
 int http_status(ErrorCode code) {
   switch (code) {
     case ErrorCode::kInvalidArgument:
@@ -228,10 +236,10 @@ void DashboardServer::routes() {
 }
 
 void DashboardServer::login_routes() {
-  // Every request but /login and /healthz needs a reader.
+  // Every request but /login, /logout and /healthz needs a reader.
   http_->set_pre_routing_handler(
       [this](const httplib::Request& request, httplib::Response& response) {
-        if (request.path == "/login" || request.path == "/healthz")
+        if (request.path == "/login" || request.path == "/logout" || request.path == "/healthz")
           return httplib::Server::HandlerResponse::Unhandled;
         const auto decision = access_.decide(request);
         if (decision.outcome == security::AccessDecision::Outcome::kAllowed)
@@ -243,23 +251,47 @@ void DashboardServer::login_routes() {
                              "text/html; charset=utf-8");
         return httplib::Server::HandlerResponse::Handled;
       });
-  http_->Get("/login", [](const httplib::Request&, httplib::Response& response) {
-    response.set_content(login_page(""), "text/html; charset=utf-8");
+  http_->Get("/login", [this](const httplib::Request&, httplib::Response& response) {
+    show_login(response, 200, "");
   });
   http_->Post("/login", [this](const httplib::Request& request, httplib::Response& response) {
-    const std::string token = request.get_param_value("token");
-    if (!is_cookie_safe(token) || !access_.is_reader_token(token)) {
-      response.status = 401;
-      response.set_content(login_page("that token is not a reader's in this dashboard's policy"),
-                           "text/html; charset=utf-8");
+    // A URL is logged by proxies and kept in histories: the token comes in the body only.
+    if (request.target.find('?') != std::string::npos) {
+      show_login(response, 400, "the token goes in the form's body, never in the URL");
       return;
     }
-    // HttpOnly: no script reads it; Secure: HTTPS only (a policy needs TLS); Strict: never
-    // sent from another site's page.
-    response.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + token +
-                                          "; HttpOnly; Secure; SameSite=Strict; Path=/");
+    const std::string nonce = request.get_param_value("csrf");
+    if (nonce.empty() || nonce != cookie_value(request.get_header_value("Cookie"), kLoginCookie) ||
+        !access_.sessions().redeem_login_nonce(nonce)) {
+      show_login(response, 403,
+                 "this sign-in form expired or came from another site: sign in "
+                 "from this page");
+      return;
+    }
+    const SignIn signed_in = access_.sign_in(request.get_param_value("token"));
+    if (!signed_in.session_id) {
+      show_login(response, 401, signed_in.refusal);
+      return;
+    }
+    response.set_header("Set-Cookie", cookie(kSessionCookie, *signed_in.session_id, "/",
+                                             access_.sessions().lifetime()));
     response.set_redirect("/", 303);
   });
+  http_->Post("/logout", [this](const httplib::Request& request, httplib::Response& response) {
+    access_.sessions().close(cookie_value(request.get_header_value("Cookie"), kSessionCookie));
+    response.set_header("Set-Cookie", cookie(kSessionCookie, "", "/", std::chrono::seconds(0)));
+    response.set_redirect("/login", 303);
+  });
+}
+
+void DashboardServer::show_login(httplib::Response& response, int status,
+                                 const std::string& error) {
+  // A fresh one-time nonce, in the form and in a cookie only this site's pages send back.
+  const std::string nonce = access_.sessions().issue_login_nonce();
+  response.status = status;
+  response.set_header("Set-Cookie",
+                      cookie(kLoginCookie, nonce, "/login", SessionBook::kLoginFormLifetime));
+  response.set_content(login_page(error, nonce), "text/html; charset=utf-8");
 }
 
 }  // namespace pnp::dashboard

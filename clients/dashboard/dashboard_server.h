@@ -47,6 +47,8 @@ class DashboardServer {
  private:
   void routes();
   void login_routes();
+  // The sign-in page with `error` (empty: none) and a fresh one-time form nonce.
+  void show_login(httplib::Response& response, int status, const std::string& error);
 
   DashboardConfig config_;
   DashboardAccess access_;

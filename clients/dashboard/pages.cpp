@@ -141,14 +141,16 @@ std::string access_page(int status, const std::string& message) {
                   "token</a>.</p>\n");
 }
 
-std::string login_page(const std::string& error) {
+std::string login_page(const std::string& error, const std::string& nonce) {
   std::string body;
   if (!error.empty()) body += "<p class=\"bad\" id=\"error\">" + escape_xml(error) + "</p>\n";
-  body +=
-      "<form method=\"post\" action=\"/login\"><label>reader's token <input "
-      "type=\"password\" name=\"token\" size=\"66\" autocomplete=\"off\"></label> "
-      "<button>sign in</button></form>\n<p>The token is kept in an HttpOnly cookie for this "
-      "site only; the platform's policy stores its SHA-256.</p>\n";
+  body += "<form method=\"post\" action=\"/login\"><input type=\"hidden\" name=\"csrf\" value=\"" +
+          escape_xml(nonce) +
+          "\"><label>reader's token <input "
+          "type=\"password\" name=\"token\" size=\"66\" autocomplete=\"off\"></label> "
+          "<button>sign in</button></form>\n<p>The token stays on the server: the browser keeps "
+          "only a session id (HttpOnly, this site only) until it expires or you sign out (POST "
+          "/logout). A token that may operate the platform or move the arm is refused here.</p>\n";
   return page("Sign in", body);
 }
 

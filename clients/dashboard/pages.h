@@ -31,7 +31,8 @@ std::string episodes_page(const PlayedEpisodes& played);
 std::string error_page(int status, const std::string& message);
 // 401/403 with what is needed and a link to /login; the login form with an error, if any.
 std::string access_page(int status, const std::string& message);
-std::string login_page(const std::string& error);
+// `nonce`: the one-time value the form posts back (SessionBook::issue_login_nonce).
+std::string login_page(const std::string& error, const std::string& nonce);
 
 // /api/runs/ID: the run's state and every evaluation, what the curve script draws.
 nlohmann::json run_json(const store::RunRecord& run,

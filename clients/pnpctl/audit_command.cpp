@@ -46,20 +46,24 @@ int audit_command(const AuditArgs& args) {
                                          {"peer", r.peer},
                                          {"rpc", r.rpc},
                                          {"code", r.code},
-                                         {"request", r.request}}
+                                         {"request", r.request},
+                                         {"recorded_by", r.recorded_by},
+                                         {"received_ms", r.received_ms}}
                               .dump()
                               .c_str());
     }
     return 0;
   }
-  Table table({"time", "service", "principal", "rpc", "code", "peer", "request"});
+  // "recorded by": the server that forwarded the record, as the store authenticated it
+  // ("self": written by the server that answered the call).
+  Table table({"time", "service", "principal", "rpc", "code", "recorded by", "peer", "request"});
   for (const store::AuditRecord& r : records) {
     // "/pnp.policy.v1.PolicyService/PromoteCheckpoint" -> "PolicyService/PromoteCheckpoint"
     const auto slash = r.rpc.rfind('/');
     const auto dot = r.rpc.rfind('.', slash);
     const std::string rpc = dot == std::string::npos ? r.rpc : r.rpc.substr(dot + 1);
     table.add({utc_text(r.ts_ms), r.service, r.principal.empty() ? "-" : r.principal, rpc, r.code,
-               r.peer, r.request});
+               r.recorded_by.empty() ? "self" : r.recorded_by, r.peer, r.request});
   }
   table.print(stdout);
   return 0;

@@ -12,12 +12,15 @@
 #include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/run_watch.h"
 #include "clients/pnpctl/table.h"
+#include "common/secret_token.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 
 namespace pnp::pnpctl {
 
 train::v1::CreateTrainingRunRequest make_request(const TrainArgs& a) {
   train::v1::CreateTrainingRunRequest r;
+  // One key per run meant: a call retried after its answer was lost returns that run.
+  r.set_request_id(secret_token_hex(16));
   r.set_role(parse_role(a.role, "--role"));
   r.set_algorithm(parse_algorithm(
       !a.algorithm.empty() ? a.algorithm : (a.role == "hlc" ? "a3c" : "ddpg_her"), "--algo"));

@@ -14,6 +14,8 @@ std::string_view access_class_name(AccessClass c) {
       return "robot";
     case AccessClass::kService:
       return "service";
+    case AccessClass::kDelegate:
+      return "delegate";
   }
   return "unknown";
 }

@@ -38,6 +38,10 @@ PolicyPrincipal parse_principal(const nlohmann::json& entry, const std::string& 
   PolicyPrincipal p;
   p.name = text_field(entry, "name", where);
   if (p.name.empty()) throw_invalid_argument(where + ".name", "a non-empty string", "none");
+  // A run's owner is "<principal>/<instance>" (pnp-store-server): a '/' in a name would let
+  // one principal spell another's runs.
+  if (p.name.find('/') != std::string::npos)
+    throw_invalid_argument(where + ".name", "a name without '/'", "\"" + p.name + "\"");
   p.token_sha256 = text_field(entry, "token_sha256", where);
   for (char& c : p.token_sha256)
     if (c >= 'A' && c <= 'F') c = static_cast<char>(c - 'A' + 'a');
@@ -166,14 +170,21 @@ AccessDecision decide_access(const AuthPolicy& policy, const PresentedCredential
     d.message = std::string(rpc) + ": not an RPC this server's policy knows; denied to everyone";
     return d;
   }
-  if (requirement->access_class && !who->classes.contains(*requirement->access_class)) {
+  const auto granted = [&](const std::optional<AccessClass>& c) {
+    return c && who->classes.contains(*c);
+  };
+  if (requirement->access_class && !granted(requirement->access_class) &&
+      !granted(requirement->or_class)) {
+    std::string needed = std::string(access_class_name(*requirement->access_class));
+    if (requirement->or_class)
+      needed += " or " + std::string(access_class_name(*requirement->or_class));
     d.outcome = Outcome::kPermissionDenied;
-    d.message = std::string(rpc) + " needs the " +
-                std::string(access_class_name(*requirement->access_class)) +
-                " class, which principal \"" + who->name + "\" is not granted";
+    d.message = std::string(rpc) + " needs the " + needed + " class, which principal \"" +
+                who->name + "\" is not granted";
     return d;
   }
   d.outcome = Outcome::kAllowed;
+  d.classes = who->classes;
   return d;
 }
 

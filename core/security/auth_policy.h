@@ -62,6 +62,7 @@ struct AccessDecision {
   Outcome outcome = Outcome::kUnauthenticated;
   std::string principal;  // who, when recognised
   std::string message;    // for the caller: names the RPC and what it needs, never a token
+  std::set<AccessClass> classes{};  // what the policy grants them, when allowed
 };
 
 // Decides one call of `rpc` (its method path) that requires `requirement`; `requirement`

@@ -10,6 +10,7 @@ constexpr RpcRequirement kAgent{AccessClass::kAgent};
 constexpr RpcRequirement kOperator{AccessClass::kOperator};
 constexpr RpcRequirement kRobot{AccessClass::kRobot};
 constexpr RpcRequirement kService{AccessClass::kService};
+constexpr RpcRequirement kOperatorOrDelegate{AccessClass::kOperator, AccessClass::kDelegate};
 constexpr RpcRequirement kAnyone{std::nullopt};  // any authenticated principal
 
 constexpr std::array kTable{
@@ -48,8 +49,9 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.robot.v1.RobotControllerService/Resume", kOperator, true},
     RpcAccess{"/pnp.robot.v1.SimulatedSceneService/ResetScene", kRobot, true},
     // The store (pnp-store-server): the platform's servers read as readers and write as
-    // services. Not audited here: the operator call that caused a write (create, cancel,
-    // promote) is audited by the server it reached, which knows the operator.
+    // services, under their own name (a run's owner, an audit batch's recorder). Not audited
+    // here: the operator call that caused a write (create, cancel) is audited by the server
+    // it reached, which knows the operator.
     RpcAccess{"/pnp.store.v1.StoreService/CreateRun", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/GetRun", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/ListRuns", kReader, false},
@@ -65,8 +67,12 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.store.v1.StoreService/GetCheckpointInfo", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/ListCheckpoints", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/LatestCheckpoint", kReader, false},
-    RpcAccess{"/pnp.store.v1.StoreService/ImportFinished", kService, false},
-    RpcAccess{"/pnp.store.v1.StoreService/Promote", kService, false},
+    // What changes the checkpoint every replica serves is an operator's: imported runs
+    // (pnp-import, promoted or not) and promotions, by an operator or by a server carrying
+    // out an operator's call it authenticated (pnp-inference's PromoteCheckpoint), recorded
+    // as "<operator> via <server>".
+    RpcAccess{"/pnp.store.v1.StoreService/ImportFinished", kOperator, true},
+    RpcAccess{"/pnp.store.v1.StoreService/Promote", kOperatorOrDelegate, true},
     RpcAccess{"/pnp.store.v1.StoreService/GetPromotion", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/ListPromotions", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/WatchPromotions", kReader, false},

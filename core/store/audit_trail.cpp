@@ -22,15 +22,15 @@ constexpr auto kFirstBackoff = std::chrono::milliseconds(200);
 constexpr auto kMaxBackoff = std::chrono::seconds(5);
 
 std::size_t text_bytes(const AuditRecord& r) {
-  return 64 + r.service.size() + r.principal.size() + r.peer.size() + r.rpc.size() +
-         r.request.size() + r.code.size();
+  return 72 + r.service.size() + r.principal.size() + r.peer.size() + r.rpc.size() +
+         r.request.size() + r.code.size() + r.recorded_by.size();
 }
 
 void insert(Database& db, const std::vector<AuditRecord>& batch) {
   Transaction tx(db);
   auto st = db.prepare(
-      "INSERT INTO audit (ts_ms, service, principal, peer, rpc, request, code) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?)");
+      "INSERT INTO audit (ts_ms, service, principal, peer, rpc, request, code, recorded_by, "
+      "received_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
   for (const AuditRecord& r : batch) {
     st.reset();
     st.bind(1, r.ts_ms)
@@ -39,7 +39,9 @@ void insert(Database& db, const std::vector<AuditRecord>& batch) {
         .bind(4, r.peer)
         .bind(5, r.rpc)
         .bind(6, r.request)
-        .bind(7, r.code);
+        .bind(7, r.code)
+        .bind(8, r.recorded_by)
+        .bind(9, r.received_ms != 0 ? r.received_ms : r.ts_ms);
     st.run();
   }
   tx.commit();
@@ -156,7 +158,8 @@ std::vector<AuditRecord> read_audit(const std::string& path, Millis since_ms, in
   Database db(path, {.access = Access::kReadOnly});
   migrate(db);  // read-only: refuses a file this build cannot read
   auto st = db.prepare(
-      "SELECT id, ts_ms, service, principal, peer, rpc, request, code FROM audit "
+      "SELECT id, ts_ms, service, principal, peer, rpc, request, code, recorded_by, received_ms "
+      "FROM audit "
       "WHERE ts_ms >= ? AND (? = 0 OR id < ?) ORDER BY id DESC LIMIT ?");
   st.bind(1, since_ms)
       .bind(2, before_id)
@@ -165,7 +168,8 @@ std::vector<AuditRecord> read_audit(const std::string& path, Millis since_ms, in
   std::vector<AuditRecord> out;
   while (st.step()) {
     out.push_back({st.column_int(0), st.column_int(1), st.column_text(2), st.column_text(3),
-                   st.column_text(4), st.column_text(5), st.column_text(6), st.column_text(7)});
+                   st.column_text(4), st.column_text(5), st.column_text(6), st.column_text(7),
+                   st.column_text(8), st.column_int(9)});
   }
   std::reverse(out.begin(), out.end());
   return out;

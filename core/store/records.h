@@ -17,6 +17,10 @@ bool is_terminal(RunState state);
 
 // The roles a run or a checkpoint can have; anything else is refused.
 inline constexpr std::string_view kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
+
+// The longest idempotency key of a run's creation (Store::create_run's request_id), as a
+// server scopes it ("<principal>/<client's key>", a client's key at most 128 bytes).
+inline constexpr std::size_t kMaxRequestIdBytes = 512;
 bool is_known_role(std::string_view role);
 
 using Millis = std::int64_t;  // Unix time in milliseconds
@@ -112,6 +116,11 @@ struct AuditRecord {
   std::string rpc;        // full method path
   std::string request;    // the first request message as JSON, cut at 2 KB
   std::string code;       // the final status: OK, PERMISSION_DENIED...
+  // Who wrote the record into the store: empty for the server that answered the call (it
+  // appended it itself); for a batch another server forwarded (AppendAudit), that server as
+  // the store authenticated it, never as the batch says.
+  std::string recorded_by{};
+  Millis received_ms = 0;  // when the store received it; 0: at ts_ms (written by itself)
 };
 
 }  // namespace pnp::store

@@ -84,11 +84,36 @@ RunStore::RunStore(const std::string& path, const DatabaseOptions& options) : db
   migrate(db_);
 }
 
-RunRecord RunStore::create_run(const RunSpec& spec) {
+RunRecord RunStore::create_run(const RunSpec& spec, const std::string& request_id) {
   require_spec(spec);
+  if (request_id.size() > kMaxRequestIdBytes) {
+    throw_invalid_argument("request_id", "at most " + std::to_string(kMaxRequestIdBytes) + " bytes",
+                           std::to_string(request_id.size()) + " bytes");
+  }
   Transaction tx(db_);
+  if (!request_id.empty()) {
+    auto find = db_.prepare("SELECT id FROM runs WHERE request_id = ?");
+    find.bind(1, request_id);
+    if (find.step()) {
+      RunRecord existing = get_run(find.column_int(0));
+      const RunSpec& was = existing.spec;
+      if (was.role != spec.role || was.algorithm != spec.algorithm || was.robot != spec.robot ||
+          was.object != spec.object || was.seed != spec.seed ||
+          was.config_json != spec.config_json ||
+          was.parent_checkpoint_id != spec.parent_checkpoint_id) {
+        throw_invalid_argument("request_id", "a new key for a different run",
+                               "the key of run " + std::to_string(existing.id));
+      }
+      return existing;  // the retried call's run
+    }
+  }
   if (spec.parent_checkpoint_id) checkpoint_info(*spec.parent_checkpoint_id);  // NOT_FOUND
   const std::int64_t id = insert_run(spec, RunState::kPending);
+  if (!request_id.empty()) {
+    auto key = db_.prepare("UPDATE runs SET request_id = ? WHERE id = ?");
+    key.bind(1, request_id).bind(2, id);
+    key.run();
+  }
   tx.commit();
   return get_run(id);
 }
@@ -454,8 +479,8 @@ void require_one_per_role(const std::vector<CheckpointInfo>& infos, std::string_
 
 }  // namespace
 
-std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun> runs,
-                                                    bool promote) {
+std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun> runs, bool promote,
+                                                    const std::string& by) {
   for (const FinishedRun& run : runs) {
     require_spec(run.spec);
     if (run.blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
@@ -474,7 +499,7 @@ std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun>
   if (promote) {
     require_one_per_role(infos, "runs");
     const Millis now = now_ms();
-    for (const CheckpointInfo& info : infos) upsert_promotion(info, now, "");
+    for (const CheckpointInfo& info : infos) upsert_promotion(info, now, by);
   }
   tx.commit();
   return ids;

@@ -21,7 +21,7 @@ class RunStore final : public Store {
   // read-only: it must exist with the current schema, and nothing is ever written).
   explicit RunStore(const std::string& path, const DatabaseOptions& options = {});
 
-  RunRecord create_run(const RunSpec& spec) override;
+  RunRecord create_run(const RunSpec& spec, const std::string& request_id = "") override;
   RunRecord get_run(std::int64_t id) override;
   std::vector<RunRecord> list_runs(const RunFilter& filter = {}) override;
   RunRecord set_state(std::int64_t id, RunState state, const std::string& error = "",
@@ -56,8 +56,8 @@ class RunStore final : public Store {
   std::vector<CheckpointInfo> checkpoints(std::int64_t run_id) override;
   CheckpointInfo checkpoint_info(std::int64_t checkpoint_id) override;
 
-  std::vector<std::int64_t> import_finished(std::span<const FinishedRun> runs,
-                                            bool promote) override;
+  std::vector<std::int64_t> import_finished(std::span<const FinishedRun> runs, bool promote,
+                                            const std::string& by = "") override;
 
   using Store::promote;
   std::vector<Promotion> promote(std::span<const std::int64_t> checkpoint_ids,

@@ -11,7 +11,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 6> kMigrations{
+constexpr std::array<std::string_view, 7> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -161,6 +161,16 @@ CREATE TABLE audit (
 );
 CREATE INDEX audit_by_time ON audit (ts_ms);
 ALTER TABLE promotions ADD COLUMN promoted_by TEXT NOT NULL DEFAULT '';
+)sql",
+    // 7: who wrote each audit record and when the store received it, as the store saw it
+    // (a forwarding server names the principal and time of its callers' records); the
+    // idempotency key a run was created with (a retried creation returns that run).
+    R"sql(
+ALTER TABLE audit ADD COLUMN recorded_by TEXT NOT NULL DEFAULT '';
+ALTER TABLE audit ADD COLUMN received_ms INTEGER NOT NULL DEFAULT 0;
+UPDATE audit SET received_ms = ts_ms;
+ALTER TABLE runs ADD COLUMN request_id TEXT;
+CREATE UNIQUE INDEX runs_by_request_id ON runs (request_id) WHERE request_id IS NOT NULL;
 )sql",
 };
 

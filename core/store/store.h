@@ -66,7 +66,10 @@ class Store {
   Store(Store&&) = default;
   Store& operator=(Store&&) = default;
 
-  virtual RunRecord create_run(const RunSpec& spec) = 0;
+  // A new pending run. `request_id` non-empty makes it idempotent: a run already created
+  // with that key is returned instead of a second (a retried call whose answer was lost);
+  // the key for another spec is INVALID_ARGUMENT. At most kMaxRequestIdBytes.
+  virtual RunRecord create_run(const RunSpec& spec, const std::string& request_id = "") = 0;
   virtual RunRecord get_run(std::int64_t id) = 0;  // NOT_FOUND if unknown
   virtual std::vector<RunRecord> list_runs(const RunFilter& filter = {}) = 0;
   // Moves a run to `state`. A finished run (succeeded, failed, cancelled) never changes
@@ -122,14 +125,16 @@ class Store {
   virtual CheckpointInfo checkpoint_info(std::int64_t checkpoint_id) = 0;    // NOT_FOUND if none
 
   // Finished runs with their checkpoints, all in one transaction (nothing is written if
-  // any is refused), optionally promoted in the same transaction. Returns the checkpoint
-  // ids in order.
-  virtual std::vector<std::int64_t> import_finished(std::span<const FinishedRun> runs,
-                                                    bool promote) = 0;
+  // any is refused), optionally promoted in the same transaction (`by` as promote's; a
+  // remote store records the caller it authenticated instead). Returns the checkpoint ids
+  // in order.
+  virtual std::vector<std::int64_t> import_finished(std::span<const FinishedRun> runs, bool promote,
+                                                    const std::string& by = "") = 0;
 
   // The checkpoints serve their roles from now on (replacing each role's previous one),
   // all in one transaction: a reader sees all of them or none. At most one per role.
-  // `by`: the authorized principal that asked (empty without an auth policy).
+  // `by`: the authorized principal that asked (empty without an auth policy; a remote store
+  // records the caller it authenticated, or the operator a delegate server names).
   virtual std::vector<Promotion> promote(std::span<const std::int64_t> checkpoint_ids,
                                          const std::string& by = "") = 0;
   Promotion promote(std::int64_t checkpoint_id, const std::string& by = "");

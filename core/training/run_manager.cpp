@@ -130,7 +130,8 @@ RunManager::~RunManager() {
   worker_.request_stop();
 }  // then the threads are joined (declared last), before the members they use go
 
-store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRefs& given) {
+store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRefs& given,
+                                    const std::string& request_id) {
   if (spec.role != options_.role) {
     throw_invalid_argument("role", "\"" + options_.role + "\" (this service's role)",
                            "\"" + spec.role + "\"");
@@ -198,7 +199,7 @@ store::RunRecord RunManager::create(const TrainingSpec& spec, const CheckpointRe
                         std::string(nn::gemm_path_name(nn::active_gemm_path()))};
   store::RunRecord run;
   try {
-    run = handler_store_->create_run(record);
+    run = handler_store_->create_run(record, request_id);
   } catch (const std::exception& e) {
     note_store_write(&e);
     throw;

@@ -84,7 +84,9 @@ class RunManager {
 
   // INVALID_ARGUMENT (spec, role, checkpoint roles), NOT_FOUND (checkpoint ids),
   // DATA_LOSS (corrupted checkpoint), FAILED_PRECONDITION (no promoted expert).
-  store::RunRecord create(const TrainingSpec& spec, const CheckpointRefs& refs);
+  // `request_id`: the idempotency key (store::Store::create_run), scoped by the caller.
+  store::RunRecord create(const TrainingSpec& spec, const CheckpointRefs& refs,
+                          const std::string& request_id = "");
   // A pending run is cancelled at once; a running one stops at its next round (here, or on
   // the manager that holds it, at its next heartbeat). A finished run is
   // FAILED_PRECONDITION; another role's run is FAILED_PRECONDITION too (its own service

@@ -78,6 +78,8 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
     using Outcome = security::AccessDecision::Outcome;
     if (decision.outcome == Outcome::kAllowed) {
       context->AddProperty(kPrincipalProperty, decision.principal);
+      for (const security::AccessClass c : decision.classes)
+        context->AddProperty(kClassProperty, std::string(security::access_class_name(c)));
       return grpc::Status::OK;
     }
     const bool unauthenticated = decision.outcome == Outcome::kUnauthenticated;
@@ -223,6 +225,15 @@ class AuditFactory final : public gx::ServerInterceptorFactoryInterface {
 std::string principal_of(const grpc::ServerContextBase& context) {
   const auto auth = context.auth_context();
   return auth ? first_value(*auth, kPrincipalProperty) : std::string();
+}
+
+bool caller_holds(const grpc::ServerContextBase& context, security::AccessClass access_class) {
+  const auto auth = context.auth_context();
+  if (!auth) return false;
+  const std::string_view wanted = security::access_class_name(access_class);
+  for (const auto& value : auth->FindPropertyValues(kClassProperty))
+    if (std::string_view(value.data(), value.size()) == wanted) return true;
+  return false;
 }
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(

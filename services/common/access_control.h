@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "security/access_class.h"
 #include "security/auth_policy.h"
 #include "store/audit_trail.h"
 
@@ -22,8 +23,15 @@ namespace pnp::services {
 // The AuthContext property under which an allowed call's principal is recorded.
 inline constexpr const char* kPrincipalProperty = "pnp_principal";
 
+// The AuthContext property holding each access class the allowed caller was granted.
+inline constexpr const char* kClassProperty = "pnp_class";
+
 // The caller's principal as the processor recorded it; empty without a policy.
 std::string principal_of(const grpc::ServerContextBase& context);
+
+// Whether the policy grants the caller `access_class`; false without a policy (check
+// principal_of first: without a policy every caller may do everything).
+bool caller_holds(const grpc::ServerContextBase& context, security::AccessClass access_class);
 
 // Refused operator and robot calls also go to `audit` (may be null; must outlive the server).
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(

@@ -35,6 +35,11 @@ void add_stream_limit_flags(CLI::App& app, StreamLimitOptions& options, double& 
                  "streaming calls open at once; beyond, RESOURCE_EXHAUSTED")
       ->check(CLI::Range(1, 100'000))
       ->capture_default_str();
+  app.add_option("--max-streams-per-principal", options.max_streams_per_principal,
+                 "streaming calls one authenticated principal may hold open at once (0: a "
+                 "quarter of --max-streams)")
+      ->check(CLI::Range(0, 100'000))
+      ->capture_default_str();
   idle_timeout_s = std::chrono::duration<double>(options.idle_timeout).count();
   app.add_option("--stream-idle-timeout-s", idle_timeout_s,
                  "a session or rollout stream with no message either way for this long is closed")

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/server_runtime.h"
 
 namespace pnp::services {
@@ -11,6 +12,13 @@ StreamLimits::StreamLimits(StreamLimitOptions options, std::string service)
     : options_(options), service_(std::move(service)) {
   if (options_.max_streams < 1)
     throw_invalid_argument("--max-streams", "at least 1", std::to_string(options_.max_streams));
+  if (options_.max_streams_per_principal < 0 ||
+      options_.max_streams_per_principal > options_.max_streams) {
+    throw_invalid_argument("--max-streams-per-principal",
+                           "0 (a quarter of --max-streams) to --max-streams (" +
+                               std::to_string(options_.max_streams) + ")",
+                           std::to_string(options_.max_streams_per_principal));
+  }
   if (options_.idle_timeout < std::chrono::milliseconds(1)) {
     throw_invalid_argument("--stream-idle-timeout-s", "a positive duration",
                            std::to_string(options_.idle_timeout.count()) + " ms");
@@ -32,8 +40,20 @@ StreamLimits::Slot StreamLimits::admit(grpc::ServerContext& context, std::string
                     std::to_string(options_.max_streams) +
                     " open streams (--max-streams); retry when one ends");
   }
+  std::string principal = principal_of(context);
+  if (!principal.empty()) {
+    const auto held = std::count_if(open_.begin(), open_.end(),
+                                    [&](const auto& e) { return e.second.principal == principal; });
+    if (held >= options_.principal_share()) {
+      throw Error(ErrorCode::kResourceExhausted,
+                  std::string(rpc) + ": principal \"" + principal + "\" already holds its " +
+                      std::to_string(options_.principal_share()) +
+                      " open streams on this server (--max-streams-per-principal); retry when "
+                      "one ends");
+    }
+  }
   const std::uint64_t id = next_id_++;
-  open_.emplace(id, Entry{&context, std::string(rpc), Clock::now(), idle});
+  open_.emplace(id, Entry{&context, std::string(rpc), std::move(principal), Clock::now(), idle});
   return Slot(this, id);
 }
 

@@ -1,9 +1,11 @@
 #pragma once
 // What one server's streaming calls may hold (docs/RELIABILITY.md, "Who may do what"): at
-// most `max_streams` open at once (beyond that a new one ends RESOURCE_EXHAUSTED naming the
-// flag), and a stream that carries no message either way for `idle_timeout` is cancelled, so
-// a client that opens streams and walks away cannot hold a server's threads. Each streaming
-// handler admits itself and marks its traffic:
+// most `max_streams` open at once, and at most a share of them for any one authenticated
+// principal, so that a reader's watches cannot take the slots a trainer or the gateway
+// needs (beyond either a new one ends RESOURCE_EXHAUSTED naming the flag); and a stream that
+// carries no message either way for `idle_timeout` is cancelled, so a client that opens streams and
+// walks away cannot hold a server's threads. Each streaming handler admits itself and marks its
+// traffic:
 //
 //   auto slot = limits.admit(*context, "PredictSession");   // throws RESOURCE_EXHAUSTED
 //   while (stream->Read(&request)) { slot.touch(); ... }
@@ -13,6 +15,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -26,7 +29,14 @@ namespace pnp::services {
 
 struct StreamLimitOptions {
   int max_streams = 256;
+  // Per authenticated principal (under an auth policy); 0: a quarter of max_streams, at
+  // least 1. Callers without a policy are not told apart.
+  int max_streams_per_principal = 0;
   std::chrono::milliseconds idle_timeout = std::chrono::minutes(5);
+
+  int principal_share() const {
+    return max_streams_per_principal > 0 ? max_streams_per_principal : std::max(1, max_streams / 4);
+  }
 };
 
 class StreamLimits {
@@ -61,7 +71,8 @@ class StreamLimits {
     std::uint64_t id_;
   };
 
-  // Throws pnp::Error RESOURCE_EXHAUSTED when max_streams are open.
+  // Throws pnp::Error RESOURCE_EXHAUSTED when max_streams are open, or the caller's
+  // principal holds its share.
   Slot admit(grpc::ServerContext& context, std::string_view rpc, Idle idle = Idle::kClose);
 
   int open_streams() const;
@@ -72,6 +83,7 @@ class StreamLimits {
   struct Entry {
     grpc::ServerContext* context;
     std::string rpc;
+    std::string principal;  // empty: no auth policy
     Clock::time_point last_activity;
     Idle idle;
     bool cancelled = false;

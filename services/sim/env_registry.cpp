@@ -17,7 +17,8 @@ void EnvBatch::reset(std::size_t k, std::uint64_t episode_seed) {
 
 std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::WorldProfile world,
                                 sim::Actuation actuation, std::uint64_t seed, int count,
-                                std::chrono::steady_clock::duration idle_timeout) {
+                                std::chrono::steady_clock::duration idle_timeout,
+                                const std::string& owner) {
   sim::require_supported(robot, actuation);
   if (count < 1 || count > kMaxBatch) {
     throw_invalid_argument("count", "1 to " + std::to_string(kMaxBatch), std::to_string(count));
@@ -36,7 +37,14 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
                       std::to_string(kMaxEnvironments) + " this server holds (" +
                       std::to_string(environments_) + " open): close some first");
     }
+    if (!owner.empty() && held_[owner] + count > kMaxEnvironmentsPerPrincipal) {
+      throw Error(ErrorCode::kResourceExhausted,
+                  "count: " + std::to_string(count) + " more environments would exceed the " +
+                      std::to_string(kMaxEnvironmentsPerPrincipal) + " one principal may hold (\"" +
+                      owner + "\" holds " + std::to_string(held_[owner]) + "): close some first");
+    }
     environments_ += count;  // reserved before the (slow) model loading
+    if (!owner.empty()) held_[owner] += count;
   }
   auto batch = std::make_shared<EnvBatch>();
   try {
@@ -48,9 +56,10 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
     batch->episodes.assign(static_cast<std::size_t>(count), 0);
   } catch (...) {
     std::lock_guard lock(mutex_);
-    environments_ -= count;
+    release(owner, count);
     throw;
   }
+  batch->owner = owner;
   batch->idle_timeout = idle_timeout;
   batch->touch();
   std::lock_guard lock(mutex_);
@@ -59,22 +68,22 @@ std::string EnvRegistry::create(sim::Robot robot, sim::ObjectShape object, sim::
   return id;
 }
 
-std::shared_ptr<EnvBatch> EnvRegistry::get(const std::string& id) {
+std::shared_ptr<EnvBatch> EnvRegistry::get(const std::string& id, const std::string& owner) {
   std::lock_guard lock(mutex_);
   const auto it = batches_.find(id);
-  if (it == batches_.end())
+  if (it == batches_.end() || it->second->owner != owner)
     throw Error(ErrorCode::kNotFound,
                 "env_id: no environment batch \"" + id + "\" (closed or expired?)");
   it->second->touch();
   return it->second;
 }
 
-void EnvRegistry::close(const std::string& id) {
+void EnvRegistry::close(const std::string& id, const std::string& owner) {
   std::lock_guard lock(mutex_);
   const auto it = batches_.find(id);
-  if (it == batches_.end())
+  if (it == batches_.end() || it->second->owner != owner)
     throw Error(ErrorCode::kNotFound, "env_id: no environment batch \"" + id + "\"");
-  environments_ -= static_cast<int>(it->second->envs.size());
+  release(it->second->owner, static_cast<int>(it->second->envs.size()));
   batches_.erase(it);
 }
 
@@ -83,7 +92,7 @@ int EnvRegistry::expire(std::chrono::steady_clock::time_point now) {
   int closed = 0;
   for (auto it = batches_.begin(); it != batches_.end();) {
     if (now - it->second->last_used.load(std::memory_order_relaxed) > it->second->idle_timeout) {
-      environments_ -= static_cast<int>(it->second->envs.size());
+      release(it->second->owner, static_cast<int>(it->second->envs.size()));
       it = batches_.erase(it);
       ++closed;
     } else {
@@ -91,6 +100,13 @@ int EnvRegistry::expire(std::chrono::steady_clock::time_point now) {
     }
   }
   return closed;
+}
+
+void EnvRegistry::release(const std::string& owner, int count) {
+  environments_ -= count;
+  if (owner.empty()) return;
+  const auto it = held_.find(owner);
+  if (it != held_.end() && (it->second -= count) <= 0) held_.erase(it);
 }
 
 int EnvRegistry::environments() const {

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/convert.h"
 #include "services/common/sim_convert.h"
 #include "services/common/status.h"
@@ -128,7 +129,8 @@ void SimServiceImpl::count_steps(const sv1::StepResponse& response) {
   if (env_steps_) env_steps_->Increment(response.results_size());
 }
 
-grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEnvRequest* request,
+grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext* context,
+                                       const sv1::CreateEnvRequest* request,
                                        sv1::CreateEnvResponse* response) {
   return guarded([&] {
     const auto robot = from_proto(request->robot(), "robot");
@@ -139,27 +141,27 @@ grpc::Status SimServiceImpl::CreateEnv(grpc::ServerContext*, const sv1::CreateEn
     if (request->has_idle_timeout())
       timeout = from_proto(request->idle_timeout(), "idle_timeout", EnvRegistry::kMaxIdleTimeout);
     response->set_env_id(registry_.create(robot, object, world, actuation, request->seed(),
-                                          request->count(), timeout));
+                                          request->count(), timeout, principal_of(*context)));
     response->set_count(request->count());
     response->set_episode_steps(sim::episode_steps(actuation));
     return grpc::Status::OK;
   });
 }
 
-grpc::Status SimServiceImpl::Reset(grpc::ServerContext*, const sv1::ResetRequest* request,
+grpc::Status SimServiceImpl::Reset(grpc::ServerContext* context, const sv1::ResetRequest* request,
                                    sv1::ResetResponse* response) {
   return guarded([&] {
-    const auto batch = registry_.get(request->env_id());
+    const auto batch = registry_.get(request->env_id(), principal_of(*context));
     std::lock_guard lock(batch->mutex);
     reset_batch(*batch, *request, *response);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status SimServiceImpl::Step(grpc::ServerContext*, const sv1::StepRequest* request,
+grpc::Status SimServiceImpl::Step(grpc::ServerContext* context, const sv1::StepRequest* request,
                                   sv1::StepResponse* response) {
   return guarded([&] {
-    const auto batch = registry_.get(request->env_id());
+    const auto batch = registry_.get(request->env_id(), principal_of(*context));
     std::lock_guard lock(batch->mutex);
     step_batch(*batch, *request, *response);
     count_steps(*response);
@@ -218,10 +220,10 @@ grpc::Status SimServiceImpl::GetEnvSpec(grpc::ServerContext*, const sv1::GetEnvS
   });
 }
 
-grpc::Status SimServiceImpl::CloseEnv(grpc::ServerContext*, const sv1::CloseEnvRequest* request,
-                                      sv1::CloseEnvResponse*) {
+grpc::Status SimServiceImpl::CloseEnv(grpc::ServerContext* context,
+                                      const sv1::CloseEnvRequest* request, sv1::CloseEnvResponse*) {
   return guarded([&] {
-    registry_.close(request->env_id());
+    registry_.close(request->env_id(), principal_of(*context));
     return grpc::Status::OK;
   });
 }
@@ -238,7 +240,7 @@ grpc::Status SimServiceImpl::StreamRollout(
       throw_invalid_argument("env_id", "the first message of a rollout stream to name the batch",
                              "a reset or step");
     }
-    const auto batch = registry_.get(request.env_id());
+    const auto batch = registry_.get(request.env_id(), principal_of(*context));
     sv1::StreamRolloutResponse response;
     while (!context->IsCancelled() && stream->Read(&request)) {
       slot.touch();

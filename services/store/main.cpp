@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "rl/checkpoint_probe.h"
 #include "services/common/address.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const std::string store = resolve_store_path(db, /*must_exist=*/false);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "store");
-    StoreServiceImpl service(store, &limits);
+    StoreServiceImpl service(store, pnp::rl::probe_checkpoint, &limits);
     const auto audit = open_audit_trail(store, "store");
     security.audit = audit.get();
     ServerRuntime runtime({.address = address,

@@ -84,9 +84,11 @@ std::unique_ptr<grpc::ClientContext> RemoteStore::context(std::chrono::milliseco
   return context;
 }
 
-store::RunRecord RemoteStore::create_run(const store::RunSpec& spec) {
+store::RunRecord RemoteStore::create_run(const store::RunSpec& spec,
+                                         const std::string& request_id) {
   store_v1::CreateRunRequest request;
   to_proto(spec, *request.mutable_spec());
+  request.set_request_id(request_id);
   const auto response = call(&store_v1::StoreService::Stub::CreateRun, request, "store CreateRun");
   return from_proto(response.run());
 }
@@ -308,7 +310,7 @@ store::CheckpointInfo RemoteStore::checkpoint_info(std::int64_t checkpoint_id) {
 }
 
 std::vector<std::int64_t> RemoteStore::import_finished(std::span<const store::FinishedRun> runs,
-                                                       bool promote) {
+                                                       bool promote, const std::string&) {
   auto ctx = context(options_.transfer_timeout);
   store_v1::ImportFinishedResponse response;
   auto writer = stub_->ImportFinished(ctx.get(), &response);

@@ -46,7 +46,8 @@ class RemoteStore final : public store::Store {
   RemoteStore(std::shared_ptr<grpc::Channel> channel, std::string address,
               RemoteStoreOptions options = {});
 
-  store::RunRecord create_run(const store::RunSpec& spec) override;
+  store::RunRecord create_run(const store::RunSpec& spec,
+                              const std::string& request_id = "") override;
   store::RunRecord get_run(std::int64_t id) override;
   std::vector<store::RunRecord> list_runs(const store::RunFilter& filter = {}) override;
   store::RunRecord set_state(std::int64_t id, store::RunState state, const std::string& error = "",
@@ -82,8 +83,8 @@ class RemoteStore final : public store::Store {
   std::vector<store::CheckpointInfo> checkpoints(std::int64_t run_id) override;
   store::CheckpointInfo checkpoint_info(std::int64_t checkpoint_id) override;
 
-  std::vector<std::int64_t> import_finished(std::span<const store::FinishedRun> runs,
-                                            bool promote) override;
+  std::vector<std::int64_t> import_finished(std::span<const store::FinishedRun> runs, bool promote,
+                                            const std::string& by = "") override;
 
   using Store::promote;
   std::vector<store::Promotion> promote(std::span<const std::int64_t> checkpoint_ids,

@@ -197,9 +197,12 @@ void to_proto(const store::AuditRecord& record, store_v1::AuditEntry& out) {
   out.set_rpc(record.rpc);
   out.set_request(record.request);
   out.set_code(record.code);
+  out.set_recorded_by(record.recorded_by);
+  out.set_received_ms(record.received_ms);
 }
 
 store::AuditRecord from_proto(const store_v1::AuditEntry& entry) {
+  // recorded_by and received_ms are the store's to set, never the sender's.
   return {entry.id(),   entry.ts_ms(), entry.service(), entry.principal(),
           entry.peer(), entry.rpc(),   entry.request(), entry.code()};
 }

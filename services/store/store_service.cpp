@@ -7,6 +7,7 @@
 
 #include "common/checksum.h"
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
 #include "services/store/store_convert.h"
@@ -37,21 +38,66 @@ bool same(const std::vector<store::Promotion>& a, const std::vector<store::Promo
   return true;
 }
 
+// A client's idempotency key: room left in store::kMaxRequestIdBytes for the principal.
+constexpr std::size_t kMaxClientRequestIdBytes = 384;
+
 std::optional<long long> optional_steps(bool has, std::int64_t steps) {
   return has ? std::optional<long long>(steps) : std::nullopt;
 }
 
+// A run's owner is a server instance under the principal the store authenticated,
+// "<principal>/<instance>": another principal cannot name it, whatever it reads from
+// ListRuns. Without an auth policy, the instance as sent.
+std::string owner_of(const grpc::ServerContext& context, const std::string& instance) {
+  const std::string principal = principal_of(context);
+  return principal.empty() || instance.empty() ? instance : principal + "/" + instance;
+}
+
+// Who a promotion is recorded as: the operator who called, or the operator a delegate
+// server (pnp-inference) authenticated, as "<operator> via <server>". Without an auth
+// policy, whoever the caller names.
+std::string promoter(const grpc::ServerContext& context, const std::string& claimed) {
+  const std::string principal = principal_of(context);
+  if (principal.empty()) return claimed;
+  if (caller_holds(context, security::AccessClass::kOperator)) {
+    if (!claimed.empty() && claimed != principal) {
+      throw_invalid_argument("promoted_by",
+                             "empty or \"" + principal + "\" (an operator promotes as itself)",
+                             "\"" + claimed + "\"");
+    }
+    return principal;
+  }
+  if (claimed.empty()) {
+    throw_invalid_argument("promoted_by",
+                           "the operator " + principal +
+                               " authenticated and acts for (a server that promotes for "
+                               "operators needs an --auth-policy of its own)",
+                           "\"\"");
+  }
+  return claimed + " via " + principal;
+}
+
 }  // namespace
 
-StoreServiceImpl::StoreServiceImpl(const std::string& path, StreamLimits* limits,
-                                   store::DatabaseOptions options)
-    : connections_(path, options), limits_(limits) {}
+StoreServiceImpl::StoreServiceImpl(const std::string& path, CheckpointCheck check,
+                                   StreamLimits* limits, store::DatabaseOptions options)
+    : connections_(path, options), check_(std::move(check)), limits_(limits) {
+  if (!check_) throw_invalid_argument("check", "a checkpoint check", "none");
+}
 
-grpc::Status StoreServiceImpl::CreateRun(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::CreateRun(grpc::ServerContext* context,
                                          const store_v1::CreateRunRequest* request,
                                          store_v1::RunResponse* response) {
   return guarded([&] {
-    to_proto(connections_.borrow()->create_run(from_proto(request->spec())),
+    if (request->request_id().size() > kMaxClientRequestIdBytes) {
+      throw_invalid_argument("request_id",
+                             "at most " + std::to_string(kMaxClientRequestIdBytes) + " bytes",
+                             std::to_string(request->request_id().size()) + " bytes");
+    }
+    // One principal's key never names another's run.
+    const std::string key =
+        request->request_id().empty() ? "" : owner_of(*context, request->request_id());
+    to_proto(connections_.borrow()->create_run(from_proto(request->spec()), key),
              *response->mutable_run());
     return grpc::Status::OK;
   });
@@ -75,66 +121,68 @@ grpc::Status StoreServiceImpl::ListRuns(grpc::ServerContext*,
   });
 }
 
-grpc::Status StoreServiceImpl::SetRunState(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::SetRunState(grpc::ServerContext* context,
                                            const store_v1::SetRunStateRequest* request,
                                            store_v1::RunResponse* response) {
   return guarded([&] {
     const store::RunState state = store::parse_run_state(request->state(), "state");
     to_proto(connections_.borrow()->set_state(request->run_id(), state, request->error(),
-                                              request->owner()),
+                                              owner_of(*context, request->owner())),
              *response->mutable_run());
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::ClaimNextRun(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::ClaimNextRun(grpc::ServerContext* context,
                                             const store_v1::ClaimNextRunRequest* request,
                                             store_v1::ClaimNextRunResponse* response) {
   return guarded([&] {
     const auto lease = lease_from_proto(request->lease_ms(), "lease_ms");
-    if (auto run = connections_.borrow()->claim_next(request->role(), request->owner(), lease))
+    if (auto run = connections_.borrow()->claim_next(request->role(),
+                                                     owner_of(*context, request->owner()), lease))
       to_proto(*run, *response->mutable_run());
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::RenewLease(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::RenewLease(grpc::ServerContext* context,
                                           const store_v1::RenewLeaseRequest* request,
                                           store_v1::RenewLeaseResponse* response) {
   return guarded([&] {
     const auto lease = lease_from_proto(request->lease_ms(), "lease_ms");
-    response->set_renewed(
-        connections_.borrow()->renew_lease(request->run_id(), request->owner(), lease));
+    response->set_renewed(connections_.borrow()->renew_lease(
+        request->run_id(), owner_of(*context, request->owner()), lease));
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::ReleaseRun(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::ReleaseRun(grpc::ServerContext* context,
                                           const store_v1::ReleaseRunRequest* request,
                                           store_v1::ReleaseRunResponse*) {
   return guarded([&] {
-    connections_.borrow()->release(request->run_id(), request->owner());
+    connections_.borrow()->release(request->run_id(), owner_of(*context, request->owner()));
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::CountClaimable(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::CountClaimable(grpc::ServerContext* context,
                                               const store_v1::CountClaimableRequest* request,
                                               store_v1::CountClaimableResponse* response) {
   return guarded([&] {
-    response->set_count(connections_.borrow()->count_claimable(request->role(), request->owner()));
+    response->set_count(connections_.borrow()->count_claimable(
+        request->role(), owner_of(*context, request->owner())));
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::RecordMetric(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::RecordMetric(grpc::ServerContext* context,
                                             const store_v1::RecordMetricRequest* request,
                                             store_v1::RecordMetricResponse*) {
   return guarded([&] {
     connections_.borrow()->record_metric(
         request->run_id(), from_proto(request->point()), request->reached(),
         optional_steps(request->has_steps_to_target(), request->steps_to_target()),
-        request->owner());
+        owner_of(*context, request->owner()));
     return grpc::Status::OK;
   });
 }
@@ -153,7 +201,7 @@ grpc::Status StoreServiceImpl::ListMetrics(grpc::ServerContext*,
 }
 
 grpc::Status StoreServiceImpl::SaveCheckpoint(
-    grpc::ServerContext*, grpc::ServerReader<store_v1::SaveCheckpointRequest>* reader,
+    grpc::ServerContext* context, grpc::ServerReader<store_v1::SaveCheckpointRequest>* reader,
     store_v1::CheckpointInfo* response) {
   return guarded([&] {
     store_v1::SaveCheckpointRequest message;
@@ -171,23 +219,23 @@ grpc::Status StoreServiceImpl::SaveCheckpoint(
       blob.append(message.chunk());
     }
     const std::vector<std::uint8_t> bytes = blob.take();
+    const std::string owner = owner_of(*context, header.owner());
     auto store = connections_.borrow();
     store::CheckpointInfo info;
     switch (header.kind_case()) {
       case store_v1::SaveCheckpointHeader::kEvaluated:
         info = store->save_checkpoint(header.run_id(), header.evaluated().env_steps(),
-                                      header.evaluated().eval_success(), bytes, header.owner());
+                                      header.evaluated().eval_success(), bytes, owner);
         break;
       case store_v1::SaveCheckpointHeader::kUnevaluated:
         info = store->save_unevaluated(header.run_id(), header.unevaluated().env_steps(),
-                                       from_proto(header.unevaluated().counters()), bytes,
-                                       header.owner());
+                                       from_proto(header.unevaluated().counters()), bytes, owner);
         break;
       case store_v1::SaveCheckpointHeader::kEvaluation: {
         const auto& e = header.evaluation();
         info = store->record_evaluation(
             header.run_id(), from_proto(e.point()), bytes, e.reached(),
-            optional_steps(e.has_steps_to_target(), e.steps_to_target()), header.owner());
+            optional_steps(e.has_steps_to_target(), e.steps_to_target()), owner);
         break;
       }
       default:
@@ -246,14 +294,18 @@ grpc::Status StoreServiceImpl::LatestCheckpoint(grpc::ServerContext*,
 }
 
 grpc::Status StoreServiceImpl::ImportFinished(
-    grpc::ServerContext*, grpc::ServerReader<store_v1::ImportFinishedRequest>* reader,
+    grpc::ServerContext* context, grpc::ServerReader<store_v1::ImportFinishedRequest>* reader,
     store_v1::ImportFinishedResponse* response) {
   return guarded([&] {
     std::vector<store::FinishedRun> runs;
     std::optional<BlobAssembler> blob;
     bool promote = false;
+    // Each blob checked as a replica would serve it before anything is stored.
     const auto finish_run = [&] {
-      if (blob) runs.back().blob = blob->take();
+      if (!blob) return;
+      runs.back().blob = blob->take();
+      const std::string field = "runs[" + std::to_string(runs.size() - 1) + "]";
+      check_(runs.back().spec.role, runs.back().blob, field + ".checkpoint");
     };
     store_v1::ImportFinishedRequest message;
     while (reader->Read(&message)) {
@@ -271,20 +323,30 @@ grpc::Status StoreServiceImpl::ImportFinished(
       }
     }
     finish_run();
-    const auto ids = connections_.borrow()->import_finished(runs, promote);
+    const auto ids = connections_.borrow()->import_finished(
+        runs, promote, promote ? promoter(*context, "") : std::string());
     if (promote) promotions_changed_.bump();
     for (const auto id : ids) response->add_checkpoint_ids(id);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status StoreServiceImpl::Promote(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::Promote(grpc::ServerContext* context,
                                        const store_v1::PromoteRequest* request,
                                        store_v1::PromotionsResponse* response) {
   return guarded([&] {
+    const std::string by = promoter(*context, request->promoted_by());
     const std::vector<std::int64_t> ids(request->checkpoint_ids().begin(),
                                         request->checkpoint_ids().end());
-    const auto promoted = connections_.borrow()->promote(ids, request->promoted_by());
+    // Every replica loads what is promoted, again at each restart: each checkpoint is
+    // checked as a replica would serve it before the promotion commits.
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      auto store = connections_.borrow();
+      const store::Checkpoint checkpoint = store->load_checkpoint(ids[i]);
+      check_(store->get_run(checkpoint.info.run_id).spec.role, checkpoint.blob,
+             "checkpoint_ids[" + std::to_string(i) + "] " + std::to_string(ids[i]));
+    }
+    const auto promoted = connections_.borrow()->promote(ids, by);
     promotions_changed_.bump();
     fill(promoted, *response);
     return grpc::Status::OK;
@@ -416,7 +478,7 @@ void validate(const store_v1::AuditEntry& entry, int index) {
 
 }  // namespace
 
-grpc::Status StoreServiceImpl::AppendAudit(grpc::ServerContext*,
+grpc::Status StoreServiceImpl::AppendAudit(grpc::ServerContext* context,
                                            const store_v1::AppendAuditRequest* request,
                                            store_v1::AppendAuditResponse*) {
   return guarded([&] {
@@ -424,10 +486,17 @@ grpc::Status StoreServiceImpl::AppendAudit(grpc::ServerContext*,
       throw_invalid_argument("records", "at most 1000 per call",
                              std::to_string(request->records_size()));
     }
+    // The batch is signed by the server that sent it, as the store authenticated it: a
+    // record names both who the sender says called and who wrote it here, and when.
+    const std::string principal = principal_of(*context);
+    const std::string recorded_by = principal.empty() ? "peer:" + context->peer() : principal;
+    const store::Millis received_ms = store::now_ms();
     std::vector<store::AuditRecord> batch;
     for (int k = 0; k < request->records_size(); ++k) {
       validate(request->records(k), k);
       batch.push_back(from_proto(request->records(k)));
+      batch.back().recorded_by = recorded_by;
+      batch.back().received_ms = received_ms;
     }
     if (batch.empty()) return grpc::Status::OK;
     const std::lock_guard lock(audit_mutex_);

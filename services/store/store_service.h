@@ -9,8 +9,12 @@
 #include <grpcpp/grpcpp.h>
 
 #include <atomic>
+#include <cstdint>
+#include <functional>
 #include <mutex>
+#include <span>
 #include <string>
+#include <string_view>
 
 #include "pnp/store/v1/store_service.grpc.pb.h"
 #include "services/common/stream_limits.h"
@@ -21,10 +25,16 @@
 
 namespace pnp::services {
 
+// Checks a checkpoint's bytes as a replica would serve them for `role` (pnp-store-server
+// passes rl::probe_checkpoint); throws pnp::Error naming `field`.
+using CheckpointCheck = std::function<void(
+    std::string_view role, std::span<const std::uint8_t> bytes, std::string_view field)>;
+
 class StoreServiceImpl final : public store_v1::StoreService::Service {
  public:
-  // `limits`: caps WatchPromotions streams (may be null: no caps).
-  StoreServiceImpl(const std::string& path, StreamLimits* limits = nullptr,
+  // `check` runs on every imported checkpoint before it is stored and on every checkpoint
+  // before a promotion commits. `limits`: caps WatchPromotions streams (may be null).
+  StoreServiceImpl(const std::string& path, CheckpointCheck check, StreamLimits* limits = nullptr,
                    store::DatabaseOptions options = {});
   // Ends the watch streams (call before the server shuts down).
   void stop_watches() { stopping_ = true; }
@@ -84,6 +94,7 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
 
  private:
   StoreConnections connections_;
+  CheckpointCheck check_;
   // Audit batches are committed before AppendAudit answers, one batch at a time.
   std::mutex audit_mutex_;
   store::AuditSink audit_sink_;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "services/common/access_control.h"
 #include "services/common/convert.h"
 #include "services/common/status.h"
 #include "services/train/train_convert.h"
@@ -65,12 +66,22 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   }
 }
 
-grpc::Status TrainingServiceImpl::CreateTrainingRun(grpc::ServerContext*,
+grpc::Status TrainingServiceImpl::CreateTrainingRun(grpc::ServerContext* context,
                                                     const CreateTrainingRunRequest* request,
                                                     CreateTrainingRunResponse* response) {
   return guarded([&] {
+    constexpr std::size_t kMaxRequestId = 128;
+    if (request->request_id().size() > kMaxRequestId) {
+      throw_invalid_argument("request_id", "at most 128 bytes",
+                             std::to_string(request->request_id().size()) + " bytes");
+    }
+    // Scoped by the caller: one operator's key never returns another's run.
+    const std::string principal = principal_of(*context);
+    const std::string key = principal.empty() || request->request_id().empty()
+                                ? request->request_id()
+                                : principal + "/" + request->request_id();
     const auto [spec, refs] = from_proto(*request);
-    fill(manager_.create(spec, refs), *response->mutable_run());
+    fill(manager_.create(spec, refs, key), *response->mutable_run());
     return grpc::Status::OK;
   });
 }

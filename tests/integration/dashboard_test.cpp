@@ -7,6 +7,7 @@
 
 #include <cstdlib>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "store/checkpoint_import.h"
@@ -147,7 +148,8 @@ TEST_F(Dashboard, BadRequestsAreRefusedNamingTheParameter) {
 }
 
 // With the platform's certificates and policy (scripts/make-dev-certs): HTTPS, and only a
-// reader's token, sent as a bearer header or as the cookie /login sets, opens a page.
+// reader's token, sent as a bearer header, or given once at /login for a session, opens a
+// page.
 TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
   TempDir dir("dashboard_secured");
   const std::string certs = dir.file("certs");
@@ -175,19 +177,65 @@ TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
   EXPECT_EQ(status("/", {}), 401);
   EXPECT_EQ(status("/api/runs", {{"Authorization", "Bearer not-a-token"}}), 401);
   EXPECT_EQ(status("/", {{"Authorization", "Bearer " + token}}), 200);
-  EXPECT_EQ(status("/api/runs", {{"Cookie", "pnp_token=" + token}}), 200);
+  EXPECT_EQ(status("/api/runs", {{"Cookie", "pnp_token=" + token}}), 401)
+      << "a token is never taken from a cookie";
   EXPECT_EQ(status("/healthz", {}), 200);
-  // /login checks the token before it sets the cookie, which is for HTTPS and this site only.
-  const auto wrong = https.Post("/login", "token=0123", "application/x-www-form-urlencoded");
-  ASSERT_TRUE(wrong);
-  EXPECT_EQ(wrong->status, 401);
-  EXPECT_FALSE(wrong->has_header("Set-Cookie"));
-  const auto signed_in =
-      https.Post("/login", "token=" + token, "application/x-www-form-urlencoded");
-  ASSERT_TRUE(signed_in);
-  EXPECT_EQ(signed_in->status, 303);
-  EXPECT_EQ(signed_in->get_header_value("Set-Cookie"),
-            "pnp_token=" + token + "; HttpOnly; Secure; SameSite=Strict; Path=/");
+  // Signing in: the form's one-time nonce, sent back with the cookie /login set beside it.
+  const auto form = [&] {
+    const auto page = https.Get("/login");
+    EXPECT_TRUE(page && page->status == 200);
+    const std::string cookie = page->get_header_value("Set-Cookie");
+    const std::string nonce = cookie.substr(10, cookie.find(';') - 10);  // "pnp_login=..."
+    EXPECT_NE(page->body.find("value=\"" + nonce + "\""), std::string::npos) << page->body;
+    return std::pair{nonce, httplib::Headers{{"Cookie", "pnp_login=" + nonce}}};
+  };
+  const auto post = [&](const std::string& target, const std::string& body,
+                        const httplib::Headers& headers) {
+    const auto answer =
+        https.Post(target.c_str(), headers, body, "application/x-www-form-urlencoded");
+    EXPECT_TRUE(answer);
+    return answer ? *answer : httplib::Response{};
+  };
+  {  // A wrong token: refused, no session.
+    const auto [nonce, headers] = form();
+    const auto wrong = post("/login", "csrf=" + nonce + "&token=0123", headers);
+    EXPECT_EQ(wrong.status, 401);
+    EXPECT_EQ(wrong.get_header_value("Set-Cookie").find("pnp_session="), std::string::npos);
+  }
+  {  // The form's nonce is missing, forged, or not this browser's: another site's form.
+    const auto [nonce, headers] = form();
+    EXPECT_EQ(post("/login", "token=" + token, headers).status, 403);
+    EXPECT_EQ(post("/login", "csrf=forged&token=" + token, {{"Cookie", "pnp_login=forged"}}).status,
+              403);
+    EXPECT_EQ(post("/login", "csrf=" + nonce + "&token=" + token, {}).status, 403);
+  }
+  {  // A token in the URL: refused (URLs are logged).
+    const auto [nonce, headers] = form();
+    EXPECT_EQ(post("/login?token=" + token, "csrf=" + nonce, headers).status, 400);
+  }
+  {  // An operator's token never goes into a browser.
+    const std::string ops = read_file(certs + "/ops.token");
+    const auto [nonce, headers] = form();
+    const auto refused =
+        post("/login", "csrf=" + nonce + "&token=" + ops.substr(0, ops.find('\n')), headers);
+    EXPECT_EQ(refused.status, 401);
+    EXPECT_NE(refused.body.find("may also act as operator"), std::string::npos) << refused.body;
+  }
+  const auto [nonce, headers] = form();
+  const auto signed_in = post("/login", "csrf=" + nonce + "&token=" + token, headers);
+  EXPECT_EQ(signed_in.status, 303);
+  const std::string session = signed_in.get_header_value("Set-Cookie");
+  EXPECT_TRUE(session.starts_with("pnp_session=")) << session;
+  EXPECT_NE(session.find("; HttpOnly; Secure; SameSite=Strict; Path=/; Max-Age=28800"),
+            std::string::npos)
+      << session;
+  EXPECT_EQ(session.find(token), std::string::npos) << "the cookie carries no token";
+  const httplib::Headers browser{{"Cookie", session.substr(0, session.find(';'))}};
+  EXPECT_EQ(status("/api/runs", browser), 200);
+  // The nonce was used once; signing out ends the session on the server.
+  EXPECT_EQ(post("/login", "csrf=" + nonce + "&token=" + token, headers).status, 403);
+  EXPECT_EQ(post("/logout", "", browser).status, 303);
+  EXPECT_EQ(status("/api/runs", browser), 401);
   // Plaintext to the HTTPS port gets nothing.
   EXPECT_TRUE(http_get(port, "/").find("200 OK") == std::string::npos);
   EXPECT_EQ(dashboard.stderr_text().find(token), std::string::npos) << "a token was logged";

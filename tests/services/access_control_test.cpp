@@ -83,8 +83,10 @@ TEST(RpcAccessTable, EveryRpcOfEveryServiceHasAClass) {
 TEST(RpcAccessTable, OperatorAndRobotCallsAndStopAreAudited) {
   for (const auto& row : security::rpc_access_table()) {
     const auto& c = row.requirement.access_class;
-    const bool moves_or_operates =
-        !c || *c == security::AccessClass::kOperator || *c == security::AccessClass::kRobot;
+    const auto& alternative = row.requirement.or_class;
+    const bool moves_or_operates = !c || *c == security::AccessClass::kOperator ||
+                                   *c == security::AccessClass::kRobot ||
+                                   alternative == security::AccessClass::kOperator;
     EXPECT_EQ(row.audited, moves_or_operates) << row.path;
   }
 }

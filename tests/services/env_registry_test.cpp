@@ -51,6 +51,50 @@ TEST(EnvRegistry, RefusesAnOversizedBatchNamingCount) {
   EXPECT_EQ(registry.environments(), 0);
 }
 
+// Ids come from a counter: a batch belongs to the principal that created it, and to any
+// other it does not exist.
+TEST(EnvRegistry, ABatchIsInvisibleToEveryPrincipalButItsCreator) {
+  EnvRegistry registry;
+  const auto id =
+      registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                      sim::Actuation::kMocap, 1, 2, seconds(60), "approach");
+  for (const std::string stranger : {"retract", ""}) {
+    EXPECT_THROW(
+        try { registry.get(id, stranger); } catch (const Error& e) {
+          EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+          throw;
+        },
+        Error);
+    EXPECT_THROW(registry.close(id, stranger), Error);
+  }
+  EXPECT_EQ(registry.environments(), 2);
+  EXPECT_EQ(registry.get(id, "approach")->envs.size(), 2u);
+  registry.close(id, "approach");
+  EXPECT_EQ(registry.environments(), 0);
+}
+
+TEST(EnvRegistry, OnePrincipalHoldsAtMostHalfTheEnvironments) {
+  EnvRegistry registry;
+  const auto create = [&](const std::string& who) {
+    return registry.create(sim::Robot::kPanda, sim::ObjectShape::kBlock, sim::WorldProfile::kGym,
+                           sim::Actuation::kMocap, 1, EnvRegistry::kMaxBatch, seconds(60), who);
+  };
+  const auto first = create("greedy");
+  create("greedy");  // 128: its share
+  try {
+    create("greedy");
+    FAIL() << "a principal was given more than its share";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kResourceExhausted);
+    EXPECT_NE(std::string(e.what()).find("one principal may hold"), std::string::npos) << e.what();
+  }
+  // Another principal still finds the rest; the share frees as batches close.
+  create("trainer");
+  registry.close(first, "greedy");
+  create("greedy");
+  EXPECT_EQ(registry.environments(), 192);
+}
+
 // The expiry sweep (the server's housekeeping thread) reads what calls using a batch write
 // under the batch's own lock: run both at once (ThreadSanitizer judges it; it found the
 // timestamp unsynchronised).

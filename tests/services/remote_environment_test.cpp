@@ -15,6 +15,7 @@
 #include "services/sim/sim_service.h"
 #include "sim/pick_place_env.h"
 #include "sim/scripted_expert.h"
+#include "support/refusal.h"
 #include "tests/core/training/small_runs.h"
 #include "training/role_training.h"
 
@@ -49,16 +50,7 @@ class SimServer {
   bool stopped_ = false;
 };
 
-ErrorCode code_of(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  }
-  ADD_FAILURE() << "did not throw";
-  return ErrorCode::kInternal;
-}
+using pnp::testing::code_of;
 
 // In every world profile: the service builds the world the request names.
 class RemoteEnvironmentInWorld : public ::testing::TestWithParam<sim::WorldProfile> {};

@@ -100,6 +100,25 @@ class TrainingServiceTest : public ::testing::Test {
   std::unique_ptr<tv1::TrainingService::Stub> stub_;
 };
 
+// pnpctl and the Python client send one key per run they mean: a call retried after its
+// answer was lost gets the run the first created, not a second training run.
+TEST_F(TrainingServiceTest, ARetriedCreationWithItsKeyCreatesOneRun) {
+  start("approach");
+  auto request = small_request(/*max_steps=*/200);
+  request.set_request_id("0123456789abcdef0123456789abcdef");
+  tv1::CreateTrainingRunResponse first, retried;
+  ASSERT_TRUE(create(request, first).ok());
+  ASSERT_TRUE(create(request, retried).ok());
+  EXPECT_EQ(retried.run().run_id(), first.run().run_id());
+  EXPECT_EQ(run_count(), 1u);
+  request.set_request_id(std::string(129, 'k'));
+  tv1::CreateTrainingRunResponse refused;
+  const grpc::Status status = create(request, refused);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("request_id"), std::string::npos) << status.error_message();
+  EXPECT_EQ(run_count(), 1u);
+}
+
 TEST_F(TrainingServiceTest, CreateWatchMetricsAndCheckpoints) {
   start("approach");
   tv1::CreateTrainingRunResponse created;

@@ -44,7 +44,10 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
     std::filesystem::create_directories(dir_);
     path_ = (dir_ / "pnp.db").string();
     if (GetParam() == Backend::kRemote) {
-      service_ = std::make_unique<services::StoreServiceImpl>(path_);
+      // The contract is about storage: any bytes are a checkpoint here. The server's own
+      // check (rl::probe_checkpoint) is pinned by store_service_test.
+      service_ = std::make_unique<services::StoreServiceImpl>(
+          path_, [](std::string_view, std::span<const std::uint8_t>, std::string_view) {});
       server_ = std::make_unique<services::ServerRuntime>(
           services::ServerConfig{.address = "127.0.0.1:0",
                                  .max_message_bytes = pnp::services::kStoreMessageBytes,

@@ -275,6 +275,28 @@ TEST_P(StoreContract, APromotionOfManyIsSeenWholeByAConcurrentReader) {
   EXPECT_EQ(writer.promoted("approach")->checkpoint_id, sets[0][0]);
 }
 
+// A client that retries a creation whose answer was lost (a dropped connection, a
+// deadline) sends the same key: it gets the run the first call created, not a second.
+TEST_P(StoreContract, ACreationRetriedWithItsKeyReturnsTheRunTheFirstCreated) {
+  auto s = open();
+  Store& store = *s;
+  const RunRecord first = store.create_run(spec(), "key-1");
+  const RunRecord retried = store.create_run(spec(), "key-1");
+  EXPECT_EQ(retried.id, first.id);
+  EXPECT_EQ(store.list_runs().size(), 1u);
+  // Without a key, or with another, a run each time.
+  EXPECT_NE(store.create_run(spec()).id, first.id);
+  EXPECT_NE(store.create_run(spec(), "key-2").id, first.id);
+  EXPECT_EQ(store.list_runs().size(), 3u);
+  // The key of one run is never the answer for a different one.
+  RunSpec other = spec();
+  other.seed += 1;
+  EXPECT_EQ(code_of([&] { store.create_run(other, "key-1"); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(code_of([&] { store.create_run(spec(), std::string(600, 'k')); }),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(store.list_runs().size(), 3u);
+}
+
 TEST_P(StoreContract, AnImportIsOneTransactionOptionallyPromoted) {
   auto s = open();
   Store& store = *s;

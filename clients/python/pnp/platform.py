@@ -3,6 +3,8 @@ Python -- what pnpctl does from a shell."""
 
 from __future__ import annotations
 
+import secrets
+
 import grpc
 
 from pnp import names, records
@@ -133,7 +135,9 @@ class Platform:
             prefix_checkpoint_ids=list(prefix_checkpoint_ids),
             expert_checkpoint_ids=list(expert_checkpoint_ids),
             ddpg=_config(train.DdpgHerConfig, ddpg, "ddpg"),
-            a3c=_config(train.A3cConfig, a3c, "a3c"))
+            a3c=_config(train.A3cConfig, a3c, "a3c"),
+            # One key per run meant: a call retried after its answer was lost returns that run.
+            request_id=secrets.token_hex(16))
         run = self._train_call(role, "CreateTrainingRun", request).run
         return Run(self, role, run.run_id)
 
