@@ -80,11 +80,18 @@ Millis now_ms() {
       .count();
 }
 
-RunStore::RunStore(const std::string& path, const DatabaseOptions& options) : db_(path, options) {
+RunStore::RunStore(const std::string& path, const DatabaseOptions& options,
+                   const StoreQuotas& quotas)
+    : db_(path, options), quotas_(quotas) {
   migrate(db_);
 }
 
 RunRecord RunStore::create_run(const RunSpec& spec, const std::string& request_id) {
+  return create_run_for(spec, request_id, "");
+}
+
+RunRecord RunStore::create_run_for(const RunSpec& spec, const std::string& request_id,
+                                   const std::string& created_by) {
   require_spec(spec);
   if (request_id.size() > kMaxRequestIdBytes) {
     throw_invalid_argument("request_id", "at most " + std::to_string(kMaxRequestIdBytes) + " bytes",
@@ -108,12 +115,15 @@ RunRecord RunStore::create_run(const RunSpec& spec, const std::string& request_i
     }
   }
   if (spec.parent_checkpoint_id) checkpoint_info(*spec.parent_checkpoint_id);  // NOT_FOUND
+  if (!created_by.empty()) require_open_run_quota(created_by);
   const std::int64_t id = insert_run(spec, RunState::kPending);
-  if (!request_id.empty()) {
-    auto key = db_.prepare("UPDATE runs SET request_id = ? WHERE id = ?");
-    key.bind(1, request_id).bind(2, id);
-    key.run();
-  }
+  auto tag = db_.prepare("UPDATE runs SET request_id = ?, created_by = ? WHERE id = ?");
+  if (request_id.empty())
+    tag.bind_null(1);
+  else
+    tag.bind(1, request_id);
+  tag.bind(2, created_by).bind(3, id);
+  tag.run();
   tx.commit();
   return get_run(id);
 }
@@ -385,9 +395,45 @@ CheckpointInfo RunStore::save_owned_checkpoint(std::int64_t run_id, long long en
   return checkpoint_info(id);
 }
 
+void RunStore::require_open_run_quota(const std::string& created_by) {
+  auto open = db_.prepare(
+      "SELECT COUNT(*) FROM runs WHERE created_by = ? AND state IN ('pending', 'running')");
+  open.bind(1, created_by);
+  open.step();
+  if (open.column_int(0) >= quotas_.max_open_runs_per_principal) {
+    throw Error(ErrorCode::kResourceExhausted,
+                "spec: \"" + created_by + "\" already has " + std::to_string(open.column_int(0)) +
+                    " pending or running runs, its quota (--max-open-runs-per-principal " +
+                    std::to_string(quotas_.max_open_runs_per_principal) +
+                    "): wait for some to finish or cancel them");
+  }
+}
+
+void RunStore::require_checkpoint_quota(const RunRecord& run, std::size_t bytes) {
+  const auto size = static_cast<std::int64_t>(bytes);
+  if (size > quotas_.max_checkpoint_bytes) {
+    throw Error(ErrorCode::kResourceExhausted,
+                "checkpoint: " + std::to_string(size) + " bytes, more than the " +
+                    std::to_string(quotas_.max_checkpoint_bytes) +
+                    " one checkpoint may have (--max-checkpoint-mb)");
+  }
+  auto used = db_.prepare("SELECT COALESCE(SUM(size_bytes), 0) FROM checkpoints WHERE run_id = ?");
+  used.bind(1, run.id);
+  used.step();
+  const std::int64_t held = used.column_int(0);
+  if (held + size > quotas_.max_run_checkpoint_bytes) {
+    throw Error(ErrorCode::kResourceExhausted,
+                "checkpoint: run " + std::to_string(run.id) + " already holds " +
+                    std::to_string(held) + " bytes of checkpoints; " + std::to_string(size) +
+                    " more would pass the " + std::to_string(quotas_.max_run_checkpoint_bytes) +
+                    " a run may hold (--max-run-checkpoint-mb): prune its old ones");
+  }
+}
+
 std::int64_t RunStore::insert_checkpoint(const RunRecord& run, long long env_steps,
                                          double eval_success, std::span<const std::uint8_t> blob,
                                          const TrainerCounters* unevaluated) {
+  require_checkpoint_quota(run, blob.size());
   auto st = db_.prepare(
       "INSERT INTO checkpoints (run_id, role, env_steps, eval_success, checksum, size_bytes, "
       "blob, created_ms, episodes, updates, wall_s, eval_wall_s) "

@@ -12,6 +12,7 @@
 #include "store/records.h"
 #include "store/sqlite.h"
 #include "store/store.h"
+#include "store/store_quotas.h"
 
 namespace pnp::store {
 
@@ -19,9 +20,14 @@ class RunStore final : public Store {
  public:
   // Opens the database at `path` (read-write: creating and migrating it if needed;
   // read-only: it must exist with the current schema, and nothing is ever written).
-  explicit RunStore(const std::string& path, const DatabaseOptions& options = {});
+  explicit RunStore(const std::string& path, const DatabaseOptions& options = {},
+                    const StoreQuotas& quotas = {});
 
   RunRecord create_run(const RunSpec& spec, const std::string& request_id = "") override;
+  // As create_run, for the authenticated principal `created_by` (empty: none), who may
+  // hold at most quotas.max_open_runs_per_principal pending or running runs.
+  RunRecord create_run_for(const RunSpec& spec, const std::string& request_id,
+                           const std::string& created_by);
   RunRecord get_run(std::int64_t id) override;
   std::vector<RunRecord> list_runs(const RunFilter& filter = {}) override;
   RunRecord set_state(std::int64_t id, RunState state, const std::string& error = "",
@@ -80,6 +86,9 @@ class RunStore final : public Store {
                                        const std::string& owner,
                                        const TrainerCounters* unevaluated);
   // `unevaluated` null: an evaluated checkpoint (no counters of its own).
+  // RESOURCE_EXHAUSTED past the quotas (store_quotas.h).
+  void require_open_run_quota(const std::string& created_by);
+  void require_checkpoint_quota(const RunRecord& run, std::size_t bytes);
   std::int64_t insert_checkpoint(const RunRecord& run, long long env_steps, double eval_success,
                                  std::span<const std::uint8_t> blob,
                                  const TrainerCounters* unevaluated = nullptr);
@@ -88,6 +97,7 @@ class RunStore final : public Store {
   GcReport prune_where(std::string_view run_condition, std::optional<std::int64_t> run_id,
                        const RetentionPolicy& policy);
   Database db_;
+  StoreQuotas quotas_;
 };
 
 Millis now_ms();

@@ -11,7 +11,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 7> kMigrations{
+constexpr std::array<std::string_view, 8> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -171,6 +171,12 @@ ALTER TABLE audit ADD COLUMN received_ms INTEGER NOT NULL DEFAULT 0;
 UPDATE audit SET received_ms = ts_ms;
 ALTER TABLE runs ADD COLUMN request_id TEXT;
 CREATE UNIQUE INDEX runs_by_request_id ON runs (request_id) WHERE request_id IS NOT NULL;
+)sql",
+    // 8: who created each run, as the store server authenticated them (the quota of open
+    // runs per principal); empty for runs created before, or without an auth policy.
+    R"sql(
+ALTER TABLE runs ADD COLUMN created_by TEXT NOT NULL DEFAULT '';
+CREATE INDEX runs_by_creator ON runs (created_by, state);
 )sql",
 };
 

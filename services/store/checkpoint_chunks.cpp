@@ -11,12 +11,13 @@
 namespace pnp::services {
 
 BlobAssembler::BlobAssembler(std::string what, std::int64_t size_bytes, std::string checksum,
-                             std::string_view size_field, std::string_view checksum_field)
+                             std::string_view size_field, std::string_view checksum_field,
+                             std::int64_t max_bytes)
     : what_(std::move(what)), size_(size_bytes), checksum_(std::move(checksum)) {
-  if (size_bytes <= 0 || size_bytes > kMaxCheckpointBytes) {
-    throw_invalid_argument(
-        size_field, "the blob's size, 1 to " + std::to_string(kMaxCheckpointBytes) + " bytes",
-        std::to_string(size_bytes));
+  if (size_bytes <= 0 || size_bytes > max_bytes) {
+    throw_invalid_argument(size_field,
+                           "the blob's size, 1 to " + std::to_string(max_bytes) + " bytes",
+                           std::to_string(size_bytes));
   }
   const bool hex =
       checksum_.size() == 16 && std::all_of(checksum_.begin(), checksum_.end(), [](char c) {

@@ -17,16 +17,18 @@ namespace pnp::services {
 inline constexpr std::size_t kCheckpointChunkBytes = 256 * 1024;
 // The message size the store service and its clients accept: a chunk and its framing.
 inline constexpr int kStoreMessageBytes = static_cast<int>(2 * kCheckpointChunkBytes);
-// The largest checkpoint the service takes (the platform's are a few MB).
+// The largest blob either end of a transfer takes at all; the store server takes at most
+// its --max-checkpoint-mb (store/store_quotas.h, 64 MiB by default).
 inline constexpr std::int64_t kMaxCheckpointBytes = 1LL << 30;
 
 // Collects one blob's chunks. `what` names the blob in errors ("checkpoint 12").
 class BlobAssembler {
  public:
-  // INVALID_ARGUMENT naming `size_field` unless 0 < size <= kMaxCheckpointBytes, or
+  // INVALID_ARGUMENT naming `size_field` unless 0 < size <= max_bytes, or
   // `checksum_field` unless the checksum is 16 hex digits.
   BlobAssembler(std::string what, std::int64_t size_bytes, std::string checksum,
-                std::string_view size_field, std::string_view checksum_field);
+                std::string_view size_field, std::string_view checksum_field,
+                std::int64_t max_bytes = kMaxCheckpointBytes);
   // DATA_LOSS if the chunks would exceed the declared size.
   void append(std::string_view chunk);
   // DATA_LOSS unless the bytes received are the declared size and checksum.

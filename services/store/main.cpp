@@ -35,14 +35,31 @@ int main(int argc, char** argv) {
   StreamLimitOptions limit_options;
   double idle_timeout_s = 0;
   add_stream_limit_flags(app, limit_options, idle_timeout_s);
+  // What one checkpoint, one run and one principal may hold (store/store_quotas.h).
+  pnp::store::StoreQuotas quotas;
+  long long checkpoint_mb = quotas.max_checkpoint_bytes >> 20;
+  long long run_mb = quotas.max_run_checkpoint_bytes >> 20;
+  app.add_option("--max-checkpoint-mb", checkpoint_mb, "the largest checkpoint taken, in MiB")
+      ->check(CLI::Range(1LL, static_cast<long long>(kMaxCheckpointBytes >> 20)))
+      ->capture_default_str();
+  app.add_option("--max-run-checkpoint-mb", run_mb,
+                 "what all of one run's checkpoints may hold together, in MiB")
+      ->check(CLI::Range(1LL, 1LL << 30))
+      ->capture_default_str();
+  app.add_option("--max-open-runs-per-principal", quotas.max_open_runs_per_principal,
+                 "pending or running runs one authenticated principal may have created")
+      ->check(CLI::Range(1, 1'000'000))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  quotas.max_checkpoint_bytes = checkpoint_mb << 20;
+  quotas.max_run_checkpoint_bytes = run_mb << 20;
   try {
     validate_address(address, "--address");  // before the file is created
     MetricsRegistry metrics;
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const std::string store = resolve_store_path(db, /*must_exist=*/false);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "store");
-    StoreServiceImpl service(store, pnp::rl::probe_checkpoint, &limits);
+    StoreServiceImpl service(store, pnp::rl::probe_checkpoint, &limits, {}, quotas);
     const auto audit = open_audit_trail(store, "store");
     security.audit = audit.get();
     ServerRuntime runtime({.address = address,

@@ -2,9 +2,10 @@
 
 namespace pnp::services {
 
-StoreConnections::StoreConnections(std::string path, store::DatabaseOptions options)
-    : path_(std::move(path)), options_(options) {
-  idle_.push_back(std::make_unique<store::RunStore>(path_, options_));
+StoreConnections::StoreConnections(std::string path, store::DatabaseOptions options,
+                                   store::StoreQuotas quotas)
+    : path_(std::move(path)), options_(options), quotas_(quotas) {
+  idle_.push_back(std::make_unique<store::RunStore>(path_, options_, quotas_));
 }
 
 StoreConnections::Borrowed::~Borrowed() {
@@ -22,7 +23,7 @@ StoreConnections::Borrowed StoreConnections::borrow() {
       return Borrowed(*this, std::move(store));
     }
   }
-  return Borrowed(*this, std::make_unique<store::RunStore>(path_, options_));
+  return Borrowed(*this, std::make_unique<store::RunStore>(path_, options_, quotas_));
 }
 
 }  // namespace pnp::services

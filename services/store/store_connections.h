@@ -17,7 +17,8 @@ class StoreConnections {
  public:
   // Opens (creating and migrating it if needed) the database once, here, so a bad path
   // fails at start, not at the first call.
-  StoreConnections(std::string path, store::DatabaseOptions options);
+  StoreConnections(std::string path, store::DatabaseOptions options,
+                   store::StoreQuotas quotas = {});
 
   class Borrowed {
    public:
@@ -43,6 +44,7 @@ class StoreConnections {
   static constexpr std::size_t kMaxIdle = 16;
   std::string path_;
   store::DatabaseOptions options_;
+  store::StoreQuotas quotas_;
   std::mutex mutex_;
   std::vector<std::unique_ptr<store::RunStore>> idle_;
 };

@@ -38,6 +38,11 @@ bool same(const std::vector<store::Promotion>& a, const std::vector<store::Promo
   return true;
 }
 
+// One ImportFinished: a hierarchy (four roles) and the end-to-end baseline, with room; its
+// blobs are held in memory until its one transaction commits.
+constexpr std::size_t kMaxImportRuns = 8;
+constexpr std::int64_t kMaxImportBytes = 256LL << 20;
+
 // A client's idempotency key: room left in store::kMaxRequestIdBytes for the principal.
 constexpr std::size_t kMaxClientRequestIdBytes = 384;
 
@@ -80,8 +85,12 @@ std::string promoter(const grpc::ServerContext& context, const std::string& clai
 }  // namespace
 
 StoreServiceImpl::StoreServiceImpl(const std::string& path, CheckpointCheck check,
-                                   StreamLimits* limits, store::DatabaseOptions options)
-    : connections_(path, options), check_(std::move(check)), limits_(limits) {
+                                   StreamLimits* limits, store::DatabaseOptions options,
+                                   store::StoreQuotas quotas)
+    : connections_(path, options, quotas),
+      quotas_(quotas),
+      check_(std::move(check)),
+      limits_(limits) {
   if (!check_) throw_invalid_argument("check", "a checkpoint check", "none");
 }
 
@@ -97,7 +106,8 @@ grpc::Status StoreServiceImpl::CreateRun(grpc::ServerContext* context,
     // One principal's key never names another's run.
     const std::string key =
         request->request_id().empty() ? "" : owner_of(*context, request->request_id());
-    to_proto(connections_.borrow()->create_run(from_proto(request->spec()), key),
+    to_proto(connections_.borrow()->create_run_for(from_proto(request->spec()), key,
+                                                   principal_of(*context)),
              *response->mutable_run());
     return grpc::Status::OK;
   });
@@ -211,7 +221,8 @@ grpc::Status StoreServiceImpl::SaveCheckpoint(
     }
     const store_v1::SaveCheckpointHeader header = message.header();
     BlobAssembler blob("checkpoint of run " + std::to_string(header.run_id()), header.size_bytes(),
-                       header.checksum(), "header.size_bytes", "header.checksum");
+                       header.checksum(), "header.size_bytes", "header.checksum",
+                       quotas_.max_checkpoint_bytes);
     while (reader->Read(&message)) {
       if (!message.has_chunk()) {
         throw_invalid_argument("chunk", "the blob's bytes after the header", "a second header");
@@ -307,15 +318,27 @@ grpc::Status StoreServiceImpl::ImportFinished(
       const std::string field = "runs[" + std::to_string(runs.size() - 1) + "]";
       check_(runs.back().spec.role, runs.back().blob, field + ".checkpoint");
     };
+    // The import commits in one transaction, so its blobs are held until it ends: bounded.
+    std::int64_t declared = 0;
     store_v1::ImportFinishedRequest message;
     while (reader->Read(&message)) {
       if (message.has_run()) {
         finish_run();
         const auto& run = message.run();
         const std::string field = "runs[" + std::to_string(runs.size()) + "]";
+        if (runs.size() >= kMaxImportRuns) {
+          throw_invalid_argument(
+              "runs", "at most " + std::to_string(kMaxImportRuns) + " per import", "more");
+        }
         if (runs.empty()) promote = run.promote();
         blob.emplace(field, run.size_bytes(), run.checksum(), field + ".size_bytes",
-                     field + ".checksum");
+                     field + ".checksum", quotas_.max_checkpoint_bytes);
+        if ((declared += run.size_bytes()) > kMaxImportBytes) {
+          throw Error(ErrorCode::kResourceExhausted,
+                      field + ".size_bytes: the import's checkpoints would pass the " +
+                          std::to_string(kMaxImportBytes) +
+                          " bytes one import may bring: import in several parts");
+        }
         runs.push_back({from_proto(run.spec()), {}});
       } else {
         if (!blob) throw_invalid_argument("run", "a run header before its chunks", "a chunk");

@@ -34,8 +34,9 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
  public:
   // `check` runs on every imported checkpoint before it is stored and on every checkpoint
   // before a promotion commits. `limits`: caps WatchPromotions streams (may be null).
+  // `quotas`: what a checkpoint, a run and a principal may hold (store/store_quotas.h).
   StoreServiceImpl(const std::string& path, CheckpointCheck check, StreamLimits* limits = nullptr,
-                   store::DatabaseOptions options = {});
+                   store::DatabaseOptions options = {}, store::StoreQuotas quotas = {});
   // Ends the watch streams (call before the server shuts down).
   void stop_watches() { stopping_ = true; }
 
@@ -94,6 +95,7 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
 
  private:
   StoreConnections connections_;
+  store::StoreQuotas quotas_;
   CheckpointCheck check_;
   // Audit batches are committed before AppendAudit answers, one batch at a time.
   std::mutex audit_mutex_;

@@ -90,7 +90,12 @@ class StoreIdentity : public ::testing::Test {
               .string();
     // Three streams in all: a quarter of them (one) per principal.
     limits_ = std::make_unique<StreamLimits>(StreamLimitOptions{.max_streams = 3}, "store");
-    service_ = std::make_unique<StoreServiceImpl>(db_, rl::probe_checkpoint, limits_.get());
+    // Room for the checked-in checkpoints (under 1 MiB each), three open runs per principal.
+    service_ = std::make_unique<StoreServiceImpl>(
+        db_, rl::probe_checkpoint, limits_.get(), store::DatabaseOptions{},
+        store::StoreQuotas{.max_checkpoint_bytes = 4 << 20,
+                           .max_run_checkpoint_bytes = 16 << 20,
+                           .max_open_runs_per_principal = 3});
     ServerSecurity security;
     security.tls = {(dir_ / "certs" / "server.pem").string(),
                     (dir_ / "certs" / "server.key").string(), "", 10};
@@ -281,6 +286,29 @@ TEST_F(StoreIdentity, ACreationKeyIsScopedToThePrincipalThatSentIt) {
   // Another principal's identical key is its own: a run of its own, never the first's.
   EXPECT_NE(as("retract")->create_run(spec, "key-1").id, mine.id);
   EXPECT_EQ(as("ops")->list_runs({}).size(), 2u);
+}
+
+TEST_F(StoreIdentity, OnePrincipalCannotQueueMoreThanItsQuotaOfRuns) {
+  store::RunSpec spec;
+  spec.role = "approach";
+  spec.algorithm = "ddpg_her";
+  spec.robot = "panda";
+  spec.object = "block";
+  auto trainer = as("approach");
+  for (int k = 0; k < 3; ++k) trainer->create_run(spec);
+  std::string message;
+  code_of([&] { trainer->create_run(spec); }, &message);
+  EXPECT_NE(message.find("RESOURCE_EXHAUSTED"), std::string::npos) << message;
+  EXPECT_NE(message.find("--max-open-runs-per-principal 3"), std::string::npos) << message;
+  as("retract")->create_run(spec);  // another principal's queue is its own
+  // A checkpoint over the server's --max-checkpoint-mb is refused as it is announced.
+  const auto run = trainer->claim_next("approach", "worker-1", std::chrono::seconds(60));
+  ASSERT_TRUE(run.has_value());
+  EXPECT_EQ(code_of([&] {
+              trainer->save_checkpoint(run->id, 100, 0.5,
+                                       std::vector<std::uint8_t>((4 << 20) + 1, 1), "worker-1");
+            }),
+            ErrorCode::kInvalidArgument);
 }
 
 // One open WatchPromotions: `admitted` if its first message arrived.

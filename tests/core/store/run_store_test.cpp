@@ -81,6 +81,37 @@ TEST_F(StoreTest, AMissingCheckpointNamesTheStoreFile) {
   }
 }
 
+// What one checkpoint, one run and one principal may hold: a trainer's identity (or whoever
+// broke into its Pod) cannot fill the shared volume.
+TEST_F(StoreTest, QuotasBoundACheckpointARunAndAPrincipalsOpenRuns) {
+  RunStore store(path_, {},
+                 StoreQuotas{.max_checkpoint_bytes = 1000,
+                             .max_run_checkpoint_bytes = 2500,
+                             .max_open_runs_per_principal = 2});
+  const auto first = store.create_run_for(test_spec(), "", "approach");
+  const auto second = store.create_run_for(test_spec(), "", "approach");
+  EXPECT_EQ(code_of([&] { store.create_run_for(test_spec(), "", "approach"); }),
+            ErrorCode::kResourceExhausted);
+  store.create_run_for(test_spec(), "", "retract");  // its own quota
+  store.create_run(test_spec());                     // no principal: not counted
+  store.set_state(second.id, RunState::kCancelled);
+  store.create_run_for(test_spec(), "", "approach");  // a finished run frees its place
+
+  const std::vector<std::uint8_t> kilobyte(1000, 7);
+  store.save_checkpoint(first.id, 100, 0.1, kilobyte);
+  store.save_checkpoint(first.id, 200, 0.2, kilobyte);
+  EXPECT_EQ(code_of([&] { store.save_checkpoint(first.id, 300, 0.3, kilobyte); }),
+            ErrorCode::kResourceExhausted)
+      << "2000 held + 1000 > 2500";
+  EXPECT_EQ(code_of([&] {
+              store.save_checkpoint(second.id, 100, 0.1, std::vector<std::uint8_t>(1001, 7));
+            }),
+            ErrorCode::kResourceExhausted)
+      << "one checkpoint over 1000";
+  EXPECT_EQ(store.checkpoints(first.id).size(), 2u);
+  EXPECT_TRUE(store.checkpoints(second.id).empty());
+}
+
 TEST_F(StoreTest, ARolledBackTransactionLeavesNothing) {
   RunStore store(path_);
   {
