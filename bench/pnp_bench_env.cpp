@@ -18,6 +18,7 @@
 
 #include "arm_sim/arm_actuated_env.h"
 #include "common/rng.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "sim/scripted_expert.h"
 #include "sim/subtask_sequence.h"
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
   app.add_option("--rounds", rounds, "alternating env/raw rounds; the best round counts")
       ->capture_default_str();
   app.add_option("--threads", threads, "threads for the all-threads figure (0: all cores)");
-  app.add_option("--seed", seed)->capture_default_str();
+  app.add_option("--seed", seed)->check(pnp::seed_value())->capture_default_str();
   app.add_flag("--json", json, "print one JSON object");
   return pnp::tools::run_tool(app, argc, argv, [&] {
     pnp::require_positive(episodes, "--episodes");

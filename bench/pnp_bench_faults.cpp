@@ -14,6 +14,7 @@
 
 #include "bench/faults/fault_run.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "tools/common/cli.h"
 
@@ -28,6 +29,7 @@ int main(int argc, char** argv) {
   bool json = false;
   app.add_option("--episodes", spec.episodes, "episodes, one fault each")->capture_default_str();
   app.add_option("--seed", spec.seed, "the fault plan's seed; episode k plays scene seed + k")
+      ->check(pnp::seed_value())
       ->capture_default_str();
   app.add_option("--checkpoints", spec.checkpoints,
                  "directory with {approach,manipulate,retract,hlc}.ckpt (panda, block)")

@@ -17,6 +17,7 @@
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/percentile.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "robot/gateway_config.h"
 #include "services/common/server_runtime.h"
@@ -115,7 +116,9 @@ int main(int argc, char** argv) {
   app.add_option("--checkpoints", checkpoints, "directory with {approach,...,hlc}.ckpt (panda)")
       ->capture_default_str();
   app.add_option("--config", config_path, "gateway config")->capture_default_str();
-  app.add_option("--seed", seed, "first episode seed")->capture_default_str();
+  app.add_option("--seed", seed, "first episode seed")
+      ->check(pnp::seed_value())
+      ->capture_default_str();
   app.add_option("--acceleration-scale", acceleration_scale,
                  "the simulated Panda's joint accelerations, x its datasheet's")
       ->capture_default_str();

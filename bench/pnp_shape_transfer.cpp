@@ -26,6 +26,7 @@
 #include "bench/shape_transfer/transfer_training.h"
 #include "build_info.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "nn/checkpoint_io.h"
 #include "tools/common/cli.h"
@@ -261,12 +262,15 @@ int main(int argc, char** argv) {
                  "how the hand follows actions in training: mocap, arm or default (the Panda's "
                  "own: docs/SIMULATION.md)")
       ->capture_default_str();
-  app.add_option("--seed", o.seed, "training seed (every role)")->capture_default_str();
+  app.add_option("--seed", o.seed, "training seed (every role)")
+      ->check(pnp::seed_value())
+      ->capture_default_str();
   app.add_option("--episodes", o.episodes, "gateway episodes per cell")->capture_default_str();
   app.add_option(
          "--gateway-seed", o.gateway_seed,
          "first gateway episode's scene seed (>= 880000, never trained on; the held-out scenes: "
          "docs/results/HELD_OUT.md)")
+      ->check(pnp::seed_value())
       ->capture_default_str();
   app.add_option("--shapes", o.shapes,
                  "new shapes (block is the trained one); none: the block alone")

@@ -14,6 +14,7 @@
 
 #include "build_info.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "nn/gemm_path.h"
 #include "tools/common/cli.h"
@@ -79,7 +80,7 @@ int main(int argc, char** argv) {
   app.add_option("--baseline-seeds", plan.baseline_seeds,
                  "seeds of each baseline (BC, BC with the original networks, end-to-end)")
       ->capture_default_str();
-  app.add_option("--first-seed", plan.first_seed)->capture_default_str();
+  app.add_option("--first-seed", plan.first_seed)->check(pnp::seed_value())->capture_default_str();
   app.add_flag("--quick", quick,
                "one seed; caps: experts 15k, HLC 20k, end-to-end 40k steps; 500 held-out episodes");
   app.add_option("--e2e-max-steps", e2e_max_steps,

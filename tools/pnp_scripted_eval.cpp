@@ -11,6 +11,7 @@
 
 #include "arm_sim/arm_env_factory.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "common/validate.h"
 #include "nn/checkpoint_io.h"
 #include "rl/expert_checkpoint.h"
@@ -192,6 +193,7 @@ int main(int argc, char** argv) {
   app.add_option("--episodes", episodes, "number of evaluation episodes (> 0)")
       ->capture_default_str();
   app.add_option("--seed", seed, "episode i uses a seed derived from (seed, i)")
+      ->check(pnp::seed_value())
       ->capture_default_str();
   app.add_option("--threads", threads, "worker threads (0: all cores); never changes results")
       ->capture_default_str();

@@ -13,6 +13,7 @@
 
 #include "build_info.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "nn/checkpoint_io.h"
 #include "nn/gemm_path.h"
 #include "tools/common/cli.h"
@@ -271,7 +272,7 @@ int main(int argc, char** argv) {
                  "how the hand follows actions: mocap (gym's), arm (the Panda's controller) or "
                  "default (the robot's own: docs/SIMULATION.md)")
       ->capture_default_str();
-  app.add_option("--seed", o.spec.seed)->capture_default_str();
+  app.add_option("--seed", o.spec.seed)->check(pnp::seed_value())->capture_default_str();
   app.add_option("--max-steps", o.spec.stop.max_steps, "training environment steps cap")
       ->capture_default_str();
   app.add_option("--target-success", o.spec.stop.target_success,

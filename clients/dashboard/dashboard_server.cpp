@@ -1,5 +1,7 @@
 #include "clients/dashboard/dashboard_server.h"
 
+#include <sys/socket.h>
+
 #include <charconv>
 #include <chrono>
 #include <filesystem>
@@ -150,6 +152,13 @@ DashboardServer::DashboardServer(DashboardConfig config)
       player_(config_.sim, config_.inference) {
   check_exposure(config_);
   http_ = make_http(config_);
+  // httplib's default also sets SO_REUSEPORT, so a second dashboard on a port in use would
+  // bind beside the first and take half its requests: only SO_REUSEADDR (a restart may
+  // rebind at once), and a port in use is refused as the gRPC servers refuse it.
+  http_->set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
   // Requests are small (a login form at most): a large body is refused before it is read.
   http_->set_payload_max_length(kMaxRequestBodyBytes);
   routes();

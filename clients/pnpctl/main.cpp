@@ -11,6 +11,7 @@
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "store/run_store.h"
 #include "training/preset.h"
 
@@ -55,7 +56,7 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
   cmd.add_option("--world", a.world, "world profile: paper or gym (docs/SIMULATION.md)")
       ->capture_default_str();
   cmd.add_option("--actuation", a.actuation, kActuationHelp)->capture_default_str();
-  cmd.add_option("--seed", a.seed)->capture_default_str();
+  cmd.add_option("--seed", a.seed)->check(pnp::seed_value())->capture_default_str();
   std::vector<std::string> presets;
   for (const auto& p : pnp::training::presets()) presets.emplace_back(p.name);
   cmd.add_option("--preset", a.preset,
@@ -210,6 +211,7 @@ int main(int argc, char** argv) {
       ->delimiter(',');
   predict_cmd->add_option("--goal", predict.goal, "x,y,z in m")->delimiter(',');
   predict_cmd->add_option("--seed", predict.seed, "sim episode seed (without --observation)")
+      ->check(pnp::seed_value())
       ->capture_default_str();
   predict_cmd->add_option("--robot", predict.robot)->capture_default_str();
   predict_cmd->add_option("--object", predict.object)->capture_default_str();
@@ -229,7 +231,9 @@ int main(int argc, char** argv) {
   auto* evaluate_cmd = app.add_subcommand(
       "evaluate", "held-out episodes of the served hierarchy through sim and inference");
   evaluate_cmd->add_option("--episodes", evaluate.episodes)->capture_default_str();
-  evaluate_cmd->add_option("--seed", evaluate.seed)->capture_default_str();
+  evaluate_cmd->add_option("--seed", evaluate.seed)
+      ->check(pnp::seed_value())
+      ->capture_default_str();
   evaluate_cmd->add_option("--robot", evaluate.robot)->capture_default_str();
   evaluate_cmd->add_option("--object", evaluate.object)->capture_default_str();
   evaluate_cmd->add_option("--world", evaluate.world, "world profile: paper or gym")
@@ -253,7 +257,9 @@ int main(int argc, char** argv) {
   pipeline_cmd->add_option("--hlc-workers", pipeline.choreographer.workers, "A3C workers")
       ->check(positive());
   pipeline_cmd->add_option("--held-out-episodes", pipeline.eval_episodes)->capture_default_str();
-  pipeline_cmd->add_option("--held-out-seed", pipeline.eval_seed)->capture_default_str();
+  pipeline_cmd->add_option("--held-out-seed", pipeline.eval_seed)
+      ->check(pnp::seed_value())
+      ->capture_default_str();
   pipeline_cmd->add_option("--wait", pipeline.wait_s, "seconds to wait for the services")
       ->capture_default_str();
   pipeline_cmd->add_option("--json-out", pipeline.json_out, "also write the results as JSON");

@@ -24,6 +24,7 @@
 #include "clients/robot_gateway/gateway_metrics.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "common/error.h"
+#include "common/seed_flag.h"
 #include "services/common/address.h"
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--episodes", episodes, "episodes to run")->capture_default_str();
   app.add_option("--seed", seed, "first episode's scene seed (then seed+1, ...)")
+      ->check(pnp::seed_value())
       ->capture_default_str();
   app.add_option("--name", name, "client name on the lease")->capture_default_str();
   app.add_flag("--dry-run", dry_run, "compute and log targets without sending them");

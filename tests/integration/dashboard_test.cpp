@@ -241,6 +241,27 @@ TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
   EXPECT_EQ(dashboard.stderr_text().find(token), std::string::npos) << "a token was logged";
 }
 
+// httplib's default socket options would let a second dashboard bind the same port and
+// take half the first one's requests; it is refused, as the gRPC servers refuse.
+TEST(DashboardStart, RefusesAPortAlreadyInUse) {
+  TempDir dir("dashboard_port_in_use");
+  { store::RunStore store(dir.file("pnp.db")); }
+  ChildProcess first("first", {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db",
+                               dir.file("pnp.db")},
+                     dir.path());
+  const int port = first.port();
+  ASSERT_GT(port, 0) << first.diagnostics();
+  ChildProcess second("second",
+                      {PNP_BIN_DIR "/pnp-dashboard", "--address",
+                       "127.0.0.1:" + std::to_string(port), "--db", dir.file("pnp.db")},
+                      dir.path());
+  const auto status = second.wait(30s);
+  ASSERT_TRUE(status && status->exited && status->code == 1) << second.diagnostics();
+  EXPECT_NE(second.stderr_text().find("cannot listen"), std::string::npos)
+      << second.stderr_text();
+  EXPECT_TRUE(http_get(port, "/healthz").starts_with("HTTP/1.1 200"));
+}
+
 TEST(DashboardStart, RefusesANonLoopbackAddressAndAMissingStore) {
   TempDir dir("dashboard_refusals");
   // Starts the dashboard on `db`; expects exit code 1 and returns what it said.
