@@ -49,6 +49,9 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
     endpoints.training(role);  // refuses an unknown role
     roles = {role};
   }
+  std::vector<train::v1::TrainingRun> runs;
+  std::string unavailable;  // the services that did not answer, for the error below
+  std::size_t skipped = 0;
   for (const auto& r : roles) {
     const std::string& address = endpoints.training(r);
     auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
@@ -61,16 +64,27 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
     if (role.empty() && status.error_code() == grpc::StatusCode::UNAVAILABLE) {
       std::fprintf(stderr, "pnpctl: %s training service (%s) unavailable: skipped\n", r.c_str(),
                    address.c_str());
+      unavailable += (unavailable.empty() ? "" : ", ") + r + " at " + address;
+      ++skipped;
       continue;
     }
     check(status, "ListTrainingRuns", address);
-    for (const auto& run : response.runs()) {
-      table.add({std::to_string(run.run_id()), short_name(run.role()), short_name(run.algorithm()),
-                 std::to_string(run.seed()), outcome_text(run), std::to_string(run.env_steps()),
-                 score_text(run), fixed(run.target_success(), 2), fixed(run.last_success(), 2),
-                 run.reached() ? std::to_string(run.steps_to_target()) : "-",
-                 std::to_string(run.latest_checkpoint_id()), run.error()});
-    }
+    runs.insert(runs.end(), response.runs().begin(), response.runs().end());
+  }
+  // An empty table would read as "no runs" when nothing was asked at all.
+  if (skipped == roles.size()) {
+    throw Error(ErrorCode::kUnavailable,
+                "no training service answered (" + unavailable +
+                    "): start the platform (scripts/run) or point pnpctl at it (--approach, "
+                    "--manipulate, ... or $PNP_APPROACH_ADDRESS, ...)");
+  }
+  order_newest_first(runs);
+  for (const auto& run : runs) {
+    table.add({std::to_string(run.run_id()), short_name(run.role()), short_name(run.algorithm()),
+               std::to_string(run.seed()), outcome_text(run), std::to_string(run.env_steps()),
+               score_text(run), fixed(run.target_success(), 2), fixed(run.last_success(), 2),
+               run.reached() ? std::to_string(run.steps_to_target()) : "-",
+               std::to_string(run.latest_checkpoint_id()), run.error()});
   }
   csv ? table.print_csv(stdout) : table.print(stdout);
   return 0;

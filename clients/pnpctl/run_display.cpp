@@ -54,4 +54,9 @@ std::string series_label(const train::v1::TrainingRun& run) {
          std::to_string(run.seed()) + " (run " + std::to_string(run.run_id()) + ")";
 }
 
+void order_newest_first(std::vector<train::v1::TrainingRun>& runs) {
+  std::stable_sort(runs.begin(), runs.end(),
+                   [](const auto& a, const auto& b) { return a.run_id() > b.run_id(); });
+}
+
 }  // namespace pnp::pnpctl

@@ -3,6 +3,7 @@
 // its progress line and its name in a plot's legend. Pure formatting, no calls.
 
 #include <string>
+#include <vector>
 
 #include "pnp/train/v1/train_service.pb.h"
 
@@ -24,5 +25,9 @@ std::string progress_line(const train::v1::TrainingRun& run, const train::v1::Me
 
 // A learning curve's legend entry: "approach ddpg_her seed 1 (run 3)".
 std::string series_label(const train::v1::TrainingRun& run);
+
+// Runs gathered from several training services, newest (highest id) first, as `pnpctl
+// runs` lists them whatever order the services answered in.
+void order_newest_first(std::vector<train::v1::TrainingRun>& runs);
 
 }  // namespace pnp::pnpctl

@@ -110,6 +110,7 @@ int train_command(const Endpoints& endpoints, const TrainArgs& args) {
         "CreateTrainingRun", address);
   std::printf("run %lld created (%s)\n", static_cast<long long>(created.run().run_id()),
               short_name(created.run().state()).c_str());
+  std::fflush(stdout);  // before the progress lines on stderr, even when redirected
   if (args.detach) return 0;
   explain_interrupt(created.run().run_id());
   const auto run = watch_run(endpoints, address, created.run().run_id(), {args.quiet, stderr});

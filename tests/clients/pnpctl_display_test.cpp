@@ -58,5 +58,15 @@ TEST(PnpctlDisplay, ALegendEntryNamesRoleAlgorithmSeedAndRun) {
   EXPECT_EQ(series_label(finished_run(true)), "approach ddpg_her seed 1 (run 3)");
 }
 
+// `pnpctl runs` gathers each role's runs from its own service: listed newest first
+// whatever order the services answered in (it printed 2, 1, 3, 4, 5).
+TEST(PnpctlDisplay, RunsFromSeveralServicesAreListedNewestFirst) {
+  std::vector<train::v1::TrainingRun> runs(5);
+  const int ids[] = {2, 1, 3, 4, 5};
+  for (int k = 0; k < 5; ++k) runs[static_cast<std::size_t>(k)].set_run_id(ids[k]);
+  order_newest_first(runs);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(runs[static_cast<std::size_t>(k)].run_id(), 5 - k);
+}
+
 }  // namespace
 }  // namespace pnp::pnpctl
