@@ -161,25 +161,32 @@ DashboardServer::DashboardServer(DashboardConfig config)
   });
   // Requests are small (a login form at most): a large body is refused before it is read.
   http_->set_payload_max_length(kMaxRequestBodyBytes);
+  // A worker for every connection the guard lets through (httplib's default is 8).
+  http_->new_task_queue = [workers = static_cast<std::size_t>(config_.guard.max_connections) + 2] {
+    return std::make_unique<httplib::ThreadPool>(workers).release();  // httplib owns it
+  };
   routes();
-  const auto colon = config_.address.rfind(':');
-  std::string host = config_.address.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
-  const int wanted = std::stoi(config_.address.substr(colon + 1));
-  port_ = wanted == 0 ? http_->bind_to_any_port(host)
-                      : (http_->bind_to_port(host, wanted) ? wanted : -1);
-  if (port_ <= 0)
-    throw Error(ErrorCode::kUnavailable, "--address " + config_.address + ": cannot listen: " +
-                                             services::listen_failure_reason(config_.address));
+  // httplib listens on loopback only; the guard serves the public address and relays.
+  const int backend = http_->bind_to_any_port("127.0.0.1");
+  if (backend <= 0)
+    throw Error(ErrorCode::kUnavailable, "dashboard: cannot listen on a loopback port");
   thread_ = std::jthread([this] { http_->listen_after_bind(); });
   // httplib's stop() does nothing until the listening loop has started: wait for it, so
   // that a destructor right after the constructor cannot hang the join.
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   while (!http_->is_running() && std::chrono::steady_clock::now() < give_up)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  try {
+    guard_ = std::make_unique<ConnectionGuard>(config_.address, backend, config_.guard);
+  } catch (...) {
+    http_->stop();
+    throw;
+  }
+  port_ = guard_->port();
 }
 
 DashboardServer::~DashboardServer() {
+  guard_.reset();  // its connections end, and with them httplib's workers' reads
   http_->stop();
 }
 

@@ -6,8 +6,9 @@
 //   /episodes         ?count=N&seed=S: held-out episodes of the served hierarchy, drawn
 //   /api/runs, /api/runs/ID   the same as JSON
 //   /healthz
-//   /login            (with an authorization policy) a reader's token, kept as a cookie
+//   /login, /logout   (with an authorization policy) a reader's token for a session
 // Every handler answers with a status and a message naming the problem; none throws.
+// httplib listens on a loopback port; the public address is the ConnectionGuard's.
 
 #include <httplib.h>
 
@@ -16,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "clients/dashboard/connection_guard.h"
 #include "clients/dashboard/dashboard_access.h"
 #include "clients/dashboard/episode_player.h"
 #include "store/store.h"
@@ -29,6 +31,7 @@ struct DashboardConfig {
   std::shared_ptr<grpc::Channel> sim, inference;
   std::string tls_cert, tls_key;                       // both: HTTPS
   std::shared_ptr<const security::AuthPolicy> policy;  // set: readers only (needs TLS)
+  GuardLimits guard{};  // connections per address, and the deadline to answer a request
 };
 
 class DashboardServer {
@@ -57,7 +60,8 @@ class DashboardServer {
   EpisodePlayer player_;
   std::unique_ptr<httplib::Server> http_;  // an httplib::SSLServer with TLS
   int port_ = 0;
-  std::jthread thread_;  // last: joined before the rest goes
+  std::jthread thread_;                     // httplib's, on a loopback port only the guard reaches
+  std::unique_ptr<ConnectionGuard> guard_;  // the public address; closed first
 };
 
 }  // namespace pnp::dashboard

@@ -50,7 +50,24 @@ int main(int argc, char** argv) {
   // episode viewer steps a simulation and asks for actions: an agent's token).
   services::ClientTlsFiles tls;
   services::add_client_security_flags(app, tls, "platform-");
+  // The front door's limits (connection_guard.h).
+  double deadline_s = std::chrono::duration<double>(config.guard.answer_deadline).count();
+  app.add_option("--max-connections", config.guard.max_connections,
+                 "connections open at once; beyond, closed unanswered")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  app.add_option("--max-connections-per-peer", config.guard.max_per_peer,
+                 "connections one client address may hold")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  app.add_option("--request-deadline-s", deadline_s,
+                 "from a request's first byte to its answer; a client that never finishes its "
+                 "request is closed then")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  config.guard.answer_deadline =
+      std::chrono::milliseconds(static_cast<long long>(deadline_s * 1000));
   try {
     services::validate_address(config.address, "--address");  // before the store is opened
     services::validate_address(sim, "--sim");

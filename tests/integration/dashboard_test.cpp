@@ -4,9 +4,13 @@
 // draws played episodes; a screenshot of each page is saved beside the test's logs.
 #include <gtest/gtest.h>
 #include <httplib.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -241,14 +245,74 @@ TEST(SecuredDashboard, OnlyAReaderGetsInOverHttps) {
   EXPECT_EQ(dashboard.stderr_text().find(token), std::string::npos) << "a token was logged";
 }
 
+// A client that never finishes its request holds nothing for long: before the front door
+// (connection_guard.h), 8 connections sending a header line every 3 s held every httplib
+// worker and /healthz timed out.
+TEST(DashboardStart, SlowClientsNeverHoldUpAHealthCheck) {
+  TempDir dir("dashboard_slow_clients");
+  { store::RunStore store(dir.file("pnp.db")); }
+  ChildProcess dashboard(
+      "dashboard",
+      {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db", dir.file("pnp.db"),
+       "--max-connections-per-peer", "12", "--request-deadline-s", "3"},
+      dir.path());
+  const int port = dashboard.port();
+  ASSERT_GT(port, 0) << dashboard.diagnostics();
+  struct Slow {  // a connection, closed when it goes
+    explicit Slow(int descriptor) : fd(descriptor) {}
+    Slow(Slow&& other) noexcept : fd(std::exchange(other.fd, -1)) {}
+    Slow& operator=(Slow&&) = delete;
+    ~Slow() {
+      if (fd >= 0) ::close(fd);
+    }
+    int fd;
+  };
+  std::vector<Slow> slow;
+  const std::string head = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n";  // never ends
+  for (int k = 0; k < 11; ++k) {
+    slow.emplace_back(connect_loopback(port));
+    ASSERT_GE(slow.back().fd, 0);
+    ASSERT_EQ(::send(slow.back().fd, head.data(), head.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(head.size()));
+  }
+  // Each sends a header line every 300 ms, well within any read timeout, for as long as it
+  // is let (httplib alone would keep a worker on each forever).
+  std::jthread dribble([&slow](const std::stop_token& stop) {
+    const std::string line = "X-Slow: 1\r\n";
+    while (!stop.stop_requested()) {
+      for (const Slow& c : slow)
+        ::send(c.fd, line.data(), line.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    }
+  });
+  // Served beside them at once (the 12th connection of this address: within its share).
+  EXPECT_TRUE(http_get(port, "/healthz").starts_with("HTTP/1.1 200")) << "held up";
+  // Past its share, an address's next connection is closed unanswered.
+  {
+    std::vector<Slow> more;
+    for (int k = 0; k < 2; ++k) more.emplace_back(connect_loopback(port));
+    EXPECT_EQ(http_get(port, "/healthz"), "") << "a 14th connection of one address was served";
+  }
+  // Each slow request is closed at its deadline (3 s) however it dribbles: the end of the
+  // stream (or a reset, for the lines it sent last), no answer.
+  for (const Slow& s : slow) {
+    timeval wait{10, 0};
+    ::setsockopt(s.fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
+    char byte = 0;
+    const auto n = ::recv(s.fd, &byte, 1, 0);
+    EXPECT_TRUE(n == 0 || (n < 0 && errno == ECONNRESET)) << "still open after its deadline";
+  }
+}
+
 // httplib's default socket options would let a second dashboard bind the same port and
 // take half the first one's requests; it is refused, as the gRPC servers refuse.
 TEST(DashboardStart, RefusesAPortAlreadyInUse) {
   TempDir dir("dashboard_port_in_use");
   { store::RunStore store(dir.file("pnp.db")); }
-  ChildProcess first("first", {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db",
-                               dir.file("pnp.db")},
-                     dir.path());
+  ChildProcess first(
+      "first",
+      {PNP_BIN_DIR "/pnp-dashboard", "--address", "127.0.0.1:0", "--db", dir.file("pnp.db")},
+      dir.path());
   const int port = first.port();
   ASSERT_GT(port, 0) << first.diagnostics();
   ChildProcess second("second",
@@ -257,8 +321,7 @@ TEST(DashboardStart, RefusesAPortAlreadyInUse) {
                       dir.path());
   const auto status = second.wait(30s);
   ASSERT_TRUE(status && status->exited && status->code == 1) << second.diagnostics();
-  EXPECT_NE(second.stderr_text().find("cannot listen"), std::string::npos)
-      << second.stderr_text();
+  EXPECT_NE(second.stderr_text().find("cannot listen"), std::string::npos) << second.stderr_text();
   EXPECT_TRUE(http_get(port, "/healthz").starts_with("HTTP/1.1 200"));
 }
 

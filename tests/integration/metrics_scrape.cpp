@@ -13,14 +13,9 @@
 namespace pnp::integration {
 
 // GET http://127.0.0.1:port/path, the whole response (headers included).
-std::string http_get(int port, const std::string& path) {
-  struct Socket {
-    int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    ~Socket() {
-      if (fd >= 0) ::close(fd);
-    }
-  } socket;
-  if (socket.fd < 0) return {};
+int connect_loopback(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<std::uint16_t>(port));
@@ -28,7 +23,24 @@ std::string http_get(int port, const std::string& path) {
   sockaddr generic{};
   static_assert(sizeof address >= sizeof generic);
   std::memcpy(&generic, &address, sizeof generic);
-  if (::connect(socket.fd, &generic, sizeof address) != 0) return {};
+  if (::connect(fd, &generic, sizeof address) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+std::string http_get(int port, const std::string& path) {
+  struct Socket {
+    int fd;
+    ~Socket() {
+      if (fd >= 0) ::close(fd);
+    }
+  } socket{connect_loopback(port)};
+  if (socket.fd < 0) return {};
+  // A server that stalls fails the test instead of hanging it.
+  timeval patience{30, 0};
+  ::setsockopt(socket.fd, SOL_SOCKET, SO_RCVTIMEO, &patience, sizeof patience);
   const std::string request = "GET " + path + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
   if (::send(socket.fd, request.data(), request.size(), 0) != static_cast<ssize_t>(request.size()))
     return {};

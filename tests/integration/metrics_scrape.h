@@ -9,8 +9,11 @@
 
 namespace pnp::integration {
 
+// A TCP connection to 127.0.0.1:port (-1 on failure); the caller closes it.
+int connect_loopback(int port);
+
 // GET http://127.0.0.1:port/path as HTTP/1.0 (so the body is never chunked), the whole
-// response (headers included); empty on failure.
+// response (headers included); empty on failure or after 30 s without a byte.
 std::string http_get(int port, const std::string& path);
 
 // The sum of a Prometheus family's samples whose labels include every one of `labels`.
