@@ -9,7 +9,7 @@ import grpc
 
 from pnp import names, records
 from pnp.endpoints import Endpoints
-from pnp.errors import from_rpc_error
+from pnp.errors import PlatformError, from_rpc_error
 from pnp.policy.v1 import policy_service_pb2 as policy
 from pnp.policy.v1 import policy_service_pb2_grpc as policy_grpc
 from pnp.session import Session
@@ -149,10 +149,29 @@ class Platform:
             role = records.run_record(run)["role"]
         return Run(self, role, run_id)
 
-    def runs(self, state: str | None = None, role: str = _STORE_READER) -> list[dict]:
-        """Every run of the store, newest first (optionally those in `state`)."""
-        out, token = [], ""
+    def runs(self, state: str | None = None, role: str | None = None) -> list[dict]:
+        """Every run, newest first: of every role (each from its own training service;
+        one that is down is skipped unless all are), or of `role`; optionally those in
+        `state`."""
         request_state = names.to_enum(names.RUN_STATES, state, "state") if state else 0
+        if role is not None:
+            names.to_enum(names.ROLES, role, "role")
+            return self._role_runs(role, request_state)
+        out, down = [], []
+        for each in names.ROLES:
+            try:
+                out.extend(self._role_runs(each, request_state))
+            except PlatformError as e:
+                if e.code != grpc.StatusCode.UNAVAILABLE:
+                    raise
+                down.append(e)
+        if len(down) == len(names.ROLES):
+            raise down[0]
+        return sorted(out, key=lambda run: run["run_id"], reverse=True)
+
+    def _role_runs(self, role: str, request_state: int) -> list[dict]:
+        """One role's runs from its training service, every page."""
+        out, token = [], ""
         while True:
             page = self._train_call(role, "ListTrainingRuns", train.ListTrainingRunsRequest(
                 page_size=1000, page_token=token, state=request_state))
@@ -169,7 +188,7 @@ class Platform:
 
     def checkpoints(self, run_id: int | None = None, role: str = _STORE_READER) -> list[dict]:
         """A run's checkpoints, or every run's when `run_id` is None."""
-        ids = [run_id] if run_id is not None else [r["run_id"] for r in self.runs(role=role)]
+        ids = [run_id] if run_id is not None else [r["run_id"] for r in self.runs()]
         out = []
         for i in ids:
             response = self._train_call(role, "ListCheckpoints",

@@ -92,6 +92,14 @@ def inference_server(workdir, store_with_hierarchy):
 
 
 @pytest.fixture(scope="session")
+def retract_server(workdir, store_with_hierarchy):
+    server = Server("retract", ["pnp-train-server", "--role", "retract", "--db",
+                                str(store_with_hierarchy), "--threads", "1"], workdir)
+    yield server
+    server.stop()
+
+
+@pytest.fixture(scope="session")
 def approach_server(workdir, store_with_hierarchy):
     server = Server("approach", ["pnp-train-server", "--role", "approach", "--db",
                                  str(store_with_hierarchy), "--threads", "1"], workdir)

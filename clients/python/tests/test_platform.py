@@ -110,6 +110,24 @@ def test_a_training_run_from_start_to_its_metrics_and_checkpoints(platform):
     assert any(c["run_id"] == run.run_id for c in platform.checkpoints())
 
 
+def test_runs_gathers_every_roles_service_newest_first(approach_server, retract_server):
+    # Each training service lists its own role's runs: runs() asks each (a service that
+    # is down is skipped) and merges them. The store holds the imported hierarchy.
+    nowhere = "127.0.0.1:1"
+    with pnp.Platform({"approach": approach_server.address, "retract": retract_server.address,
+                       "manipulate": nowhere, "hlc": nowhere, "e2e": nowhere}) as p:
+        every = p.runs()
+        assert {"approach", "retract"} <= {r["role"] for r in every}
+        ids = [r["run_id"] for r in every]
+        assert ids == sorted(ids, reverse=True)
+        assert {r["role"] for r in p.runs(role="retract")} == {"retract"}
+    roles = ("approach", "manipulate", "retract", "hlc", "e2e")
+    with pnp.Platform({role: nowhere for role in roles}) as p:
+        with pytest.raises(pnp.PlatformError) as refused:
+            p.runs()
+        assert refused.value.code == grpc.StatusCode.UNAVAILABLE
+
+
 def test_bad_training_requests_name_the_field(platform):
     with pytest.raises(ValueError, match=r"^ddpg\.learning_rate: not a setting"):
         platform.train("approach", ddpg={"learning_rate": 0.1})
