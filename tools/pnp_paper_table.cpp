@@ -196,6 +196,7 @@ int main(int argc, char** argv) {
     context.code_commit = kCodeCommit;
     context.gemm_path = nn::gemm_path_name(nn::active_gemm_path());  // refuses a bad PNP_GEMM
     context.quick = quick;
+    tools::require_writable_directory(out_dir, "--out");  // before hours of training
     const std::filesystem::path out(out_dir);
 
     if (!grid) {

@@ -322,7 +322,8 @@ int main(int argc, char** argv) {
       return;
     }
     o.spec.validate();
-    nn::active_gemm_path();  // a bad PNP_GEMM is refused before any work
+    nn::active_gemm_path();                             // a bad PNP_GEMM is refused before any work
+    tools::require_writable_directory(o.out, "--out");  // and an --out it cannot write
     const nlohmann::json summary = train(o);
     if (o.json) {
       std::cout << summary.dump() << "\n";
