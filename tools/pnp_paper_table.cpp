@@ -186,9 +186,10 @@ int main(int argc, char** argv) {
           cap("--expert-max-steps", expert_max_steps, p.expert_stop.max_steps, 15'000);
       cell.hlc_stop.max_steps = cap("--hlc-max-steps", hlc_max_steps, p.hlc_stop.max_steps, 20'000);
     };
-    auto progress = [](const std::string& method, const std::string& role,
+    // "ddpg_her seed 2/approach  ...": which of the table's runs each line is.
+    auto progress = [](const std::string& method, std::uint64_t seed, const std::string& role,
                        const rl::CurvePoint& p) {
-      tools::print_progress(stderr, method + "/" + role, p);
+      tools::print_progress(stderr, method + " seed " + std::to_string(seed) + "/" + role, p);
     };
     tools::ReportContext context;
     context.command = "build/bin/pnp-paper-table";

@@ -46,7 +46,7 @@ MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm
     }
     const std::string role(sim::subtask_name(subtask));
     auto out = rl::train_subtask_expert(
-        world, config, [&](const rl::CurvePoint& p) { progress(method, role, p); });
+        world, config, [&](const rl::CurvePoint& p) { progress(method, seed, role, p); });
     experts.push_back(std::make_unique<rl::LearnedExpert>(
         out.agent->snapshot(),
         config.ddpg.learn_gripper ? std::nullopt
@@ -60,8 +60,8 @@ MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm
   hlc.stop = s.hlc_stop;
   hlc.a3c = s.a3c;
   hlc.eval_threads = s.threads;
-  auto out = rl::train_choreographer(world, prototypes, hlc,
-                                     [&](const rl::CurvePoint& p) { progress(method, "hlc", p); });
+  auto out = rl::train_choreographer(
+      world, prototypes, hlc, [&](const rl::CurvePoint& p) { progress(method, seed, "hlc", p); });
   if (s.held_out_episodes > 0) {
     ThreadPool pool(s.threads);
     run.held_out_success =
@@ -87,8 +87,8 @@ MethodRun run_end_to_end(std::uint64_t seed, const ExperimentSettings& s,
   config.threads = s.threads;
   config.ddpg.learn_gripper = true;  // the baseline has no scripted gripper to keep
   config.ddpg.random_gripper = true;
-  auto out = rl::train_subtask_expert(world, config,
-                                      [&](const rl::CurvePoint& p) { progress("e2e", "e2e", p); });
+  auto out = rl::train_subtask_expert(
+      world, config, [&](const rl::CurvePoint& p) { progress("e2e", seed, "e2e", p); });
   add(run, "e2e", std::move(out.result));
   return run;
 }

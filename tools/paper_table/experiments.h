@@ -46,8 +46,9 @@ struct MethodRun {
   double held_out_success = -1;  // hierarchy on held-out episodes (-1: not evaluated)
 };
 
-using Progress =
-    std::function<void(const std::string& method, const std::string& role, const rl::CurvePoint&)>;
+// Each evaluation of one part of one seed's run (the seed: which of the table's runs).
+using Progress = std::function<void(const std::string& method, std::uint64_t seed,
+                                    const std::string& role, const rl::CurvePoint&)>;
 
 // `method` labels the run (ddpg_her, bc or bc_original); s.ddpg carries its networks.
 MethodRun run_hierarchy(const std::string& method, rl::ExpertAlgorithm algorithm,
