@@ -118,17 +118,19 @@ void ConnectionGuard::run(const std::stop_token& stop) {
   std::vector<std::unique_ptr<Relay>> relays;
   std::map<std::string, int> per_peer;
   std::vector<pollfd> fds;
-  while (!stop.stop_requested()) {
-    const auto now = Clock::now();
-    // A request unanswered past its deadline (a head that never ends) is closed.
+  // Closes the relays that are done, and those whose request went unanswered past its
+  // deadline (a head that never ends).
+  const auto reap = [&](Clock::time_point now) {
     std::erase_if(relays, [&](const std::unique_ptr<Relay>& r) {
       const bool late = r->awaiting_since && now - *r->awaiting_since > limits_.answer_deadline;
-      if (late || r->finished()) {
-        if (--per_peer[r->peer] == 0) per_peer.erase(r->peer);
-        return true;
-      }
-      return false;
+      if (!late && !r->finished()) return false;
+      if (--per_peer[r->peer] == 0) per_peer.erase(r->peer);
+      return true;
     });
+  };
+  while (!stop.stop_requested()) {
+    const auto now = Clock::now();
+    reap(now);
     fds.clear();
     fds.push_back({wake_read_.get(), POLLIN, 0});
     fds.push_back({listener_.get(), POLLIN, 0});
@@ -180,6 +182,7 @@ void ConnectionGuard::run(const std::stop_token& stop) {
         r.backend_told = true;
       }
     }
+    reap(Clock::now());  // a finished answer's client sees the end of its stream at once
     if ((fds[1].revents & POLLIN) == 0) continue;
     while (true) {
       sockaddr_storage storage{};
