@@ -56,7 +56,7 @@ train::v1::TrainingRun watch_run(const Endpoints& endpoints, const std::string& 
       backoff = kFirstBackoff;
       announced = false;
       last = message.run();
-      show(message, options, terminal);
+      if (!message.heartbeat()) show(message, options, terminal);
     }
     const grpc::Status status = reader->Finish();
     if (status.error_code() != grpc::StatusCode::UNAVAILABLE ||

@@ -529,7 +529,8 @@ std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun>
                                                     const std::string& by) {
   for (const FinishedRun& run : runs) {
     require_spec(run.spec);
-    if (run.blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
+    if (run.blob.empty() && !run.read_blob)
+      throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
   }
   Transaction tx(db_);
   std::vector<std::int64_t> ids;
@@ -539,7 +540,10 @@ std::vector<std::int64_t> RunStore::import_finished(std::span<const FinishedRun>
     // Finished at once, in the transaction that stores its checkpoint: no training server
     // ever sees it pending, so none takes it for an interrupted run to resume.
     const std::int64_t run_id = insert_run(run.spec, RunState::kSucceeded);
-    ids.push_back(insert_checkpoint(get_run(run_id), 0, 0.0, run.blob));
+    std::vector<std::uint8_t> scratch;  // one spooled checkpoint at a time
+    const auto& blob = run.bytes(scratch);
+    if (blob.empty()) throw_invalid_argument("checkpoint", "a non-empty blob", "0 bytes");
+    ids.push_back(insert_checkpoint(get_run(run_id), 0, 0.0, blob));
     infos.push_back(checkpoint_info(ids.back()));
   }
   if (promote) {

@@ -42,6 +42,16 @@ struct RunFilter {
 struct FinishedRun {
   RunSpec spec;
   std::vector<std::uint8_t> blob;
+  // Instead of `blob`: reads it when it is stored, so that an import of several large
+  // checkpoints holds one at a time (the store server's imports are spooled to disk).
+  std::function<std::vector<std::uint8_t>()> read_blob{};
+
+  // The checkpoint's bytes: `blob`, or what read_blob reads into `scratch`.
+  const std::vector<std::uint8_t>& bytes(std::vector<std::uint8_t>& scratch) const {
+    if (!read_blob) return blob;
+    scratch = read_blob();
+    return scratch;
+  }
 };
 
 // Which checkpoints retention keeps besides the last `keep_last` of each run: the run's

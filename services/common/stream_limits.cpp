@@ -31,8 +31,7 @@ StreamLimits::~StreamLimits() {
   wake_.notify_all();
 }
 
-StreamLimits::Slot StreamLimits::admit(grpc::ServerContext& context, std::string_view rpc,
-                                       Idle idle) {
+StreamLimits::Slot StreamLimits::admit(grpc::ServerContext& context, std::string_view rpc) {
   std::lock_guard lock(mutex_);
   if (static_cast<int>(open_.size()) >= options_.max_streams) {
     throw Error(ErrorCode::kResourceExhausted,
@@ -53,7 +52,7 @@ StreamLimits::Slot StreamLimits::admit(grpc::ServerContext& context, std::string
     }
   }
   const std::uint64_t id = next_id_++;
-  open_.emplace(id, Entry{&context, std::string(rpc), std::move(principal), Clock::now(), idle});
+  open_.emplace(id, Entry{&context, std::string(rpc), std::move(principal), Clock::now()});
   return Slot(this, id);
 }
 
@@ -69,6 +68,13 @@ void StreamLimits::Slot::touch() {
   std::lock_guard lock(owner_->mutex_);
   const auto it = owner_->open_.find(id_);
   if (it != owner_->open_.end()) it->second.last_activity = now;
+}
+
+std::chrono::milliseconds StreamLimits::Slot::heartbeat_interval() const {
+  // Without limits nothing closes a quiet watch; a heartbeat a minute still tells the
+  // client that the server is there.
+  if (owner_ == nullptr) return std::chrono::minutes(1);
+  return std::max(owner_->options_.idle_timeout / 3, std::chrono::milliseconds(1));
 }
 
 int StreamLimits::open_streams() const {
@@ -90,9 +96,7 @@ void StreamLimits::reap_loop(const std::stop_token& stop) {
     wake_.wait_for(lock, stop, period, [] { return false; });
     const auto now = Clock::now();
     for (auto& [id, entry] : open_) {
-      if (entry.idle == Idle::kKeep || entry.cancelled ||
-          now - entry.last_activity < options_.idle_timeout)
-        continue;
+      if (entry.cancelled || now - entry.last_activity < options_.idle_timeout) continue;
       // Under the lock: the slot, and so its call, cannot end meanwhile.
       entry.context->TryCancel();
       entry.cancelled = true;
@@ -108,8 +112,8 @@ void StreamLimits::reap_loop(const std::stop_token& stop) {
 }
 
 StreamLimits::Slot admit_stream(StreamLimits* limits, grpc::ServerContext& context,
-                                std::string_view rpc, StreamLimits::Idle idle) {
-  return limits ? limits->admit(context, rpc, idle) : StreamLimits::Slot::none();
+                                std::string_view rpc) {
+  return limits ? limits->admit(context, rpc) : StreamLimits::Slot::none();
 }
 
 }  // namespace pnp::services

@@ -11,7 +11,11 @@
 //   while (stream->Read(&request)) { slot.touch(); ... }
 //
 // A background thread cancels idle streams; cancelling is the only way to end a blocked
-// synchronous Read from outside the handler.
+// synchronous Read from outside the handler. No stream is exempt: a watch the server feeds
+// (a queued run's progress, the promotions) may rightly have nothing to say for long, so it
+// sends a heartbeat every `heartbeat_interval()` of quiet, and only a heartbeat the transport
+// took renews it. A client that stops reading fills its flow-control window, the writes block,
+// and the watch is closed like any idle stream.
 
 #include <grpcpp/grpcpp.h>
 
@@ -49,10 +53,6 @@ class StreamLimits {
   StreamLimits(const StreamLimits&) = delete;
   StreamLimits& operator=(const StreamLimits&) = delete;
 
-  // Whether a stream with no message either way for idle_timeout is closed. A watch the
-  // server feeds (a training run's progress) may rightly be quiet for long.
-  enum class Idle { kClose, kKeep };
-
   // One admitted stream; released when destroyed.
   class Slot {
    public:
@@ -63,6 +63,9 @@ class StreamLimits {
     Slot& operator=(Slot&&) = delete;
     ~Slot();
     void touch();  // a message went one way or the other: not idle
+    // How long a server-fed watch may stay quiet before it sends a heartbeat: a third of the
+    // idle timeout, so that two may be late before the stream counts as idle.
+    std::chrono::milliseconds heartbeat_interval() const;
 
    private:
     friend class StreamLimits;
@@ -73,7 +76,7 @@ class StreamLimits {
 
   // Throws pnp::Error RESOURCE_EXHAUSTED when max_streams are open, or the caller's
   // principal holds its share.
-  Slot admit(grpc::ServerContext& context, std::string_view rpc, Idle idle = Idle::kClose);
+  Slot admit(grpc::ServerContext& context, std::string_view rpc);
 
   int open_streams() const;
   std::uint64_t closed_for_idleness() const;
@@ -85,7 +88,6 @@ class StreamLimits {
     std::string rpc;
     std::string principal;  // empty: no auth policy
     Clock::time_point last_activity;
-    Idle idle;
     bool cancelled = false;
   };
   void reap_loop(const std::stop_token& stop);
@@ -102,7 +104,6 @@ class StreamLimits {
 
 // `limits` may be null (a service built without limits, as in tests): Slot::none().
 StreamLimits::Slot admit_stream(StreamLimits* limits, grpc::ServerContext& context,
-                                std::string_view rpc,
-                                StreamLimits::Idle idle = StreamLimits::Idle::kClose);
+                                std::string_view rpc);
 
 }  // namespace pnp::services

@@ -50,6 +50,12 @@ int main(int argc, char** argv) {
                  "pending or running runs one authenticated principal may have created")
       ->check(CLI::Range(1, 1'000'000))
       ->capture_default_str();
+  long long transfer_mb = kDefaultMaxTransferBytes >> 20;
+  app.add_option("--max-transfer-mb", transfer_mb,
+                 "checkpoint bytes held in memory for transfers at once, in MiB (at least twice "
+                 "--max-checkpoint-mb: one principal holds at most half)")
+      ->check(CLI::Range(1LL, 1LL << 20))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   quotas.max_checkpoint_bytes = checkpoint_mb << 20;
   quotas.max_run_checkpoint_bytes = run_mb << 20;
@@ -59,7 +65,8 @@ int main(int argc, char** argv) {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);
     const std::string store = resolve_store_path(db, /*must_exist=*/false);
     StreamLimits limits(stream_limit_options(limit_options, idle_timeout_s), "store");
-    StoreServiceImpl service(store, pnp::rl::probe_checkpoint, &limits, {}, quotas);
+    StoreServiceImpl service(store, pnp::rl::probe_checkpoint, &limits, {}, quotas,
+                             transfer_mb << 20);
     const auto audit = open_audit_trail(store, "store");
     security.audit = audit.get();
     ServerRuntime runtime({.address = address,

@@ -319,12 +319,14 @@ std::vector<std::int64_t> RemoteStore::import_finished(std::span<const store::Fi
   for (const auto& run : runs) {
     if (!open) break;
     message.Clear();
+    std::vector<std::uint8_t> scratch;
+    const auto& blob = run.bytes(scratch);
     auto& header = *message.mutable_run();
     to_proto(run.spec, *header.mutable_spec());
-    header.set_checksum(fnv1a64_hex(run.blob));
-    header.set_size_bytes(static_cast<std::int64_t>(run.blob.size()));
+    header.set_checksum(fnv1a64_hex(blob));
+    header.set_size_bytes(static_cast<std::int64_t>(blob.size()));
     header.set_promote(promote);
-    open = writer->Write(message) && for_each_chunk(run.blob, [&](std::string_view chunk) {
+    open = writer->Write(message) && for_each_chunk(blob, [&](std::string_view chunk) {
              message.Clear();
              message.set_chunk(std::string(chunk));
              return writer->Write(message);
@@ -425,6 +427,7 @@ grpc::Status RemoteStore::watch_promotions(
   auto reader = stub_->WatchPromotions(&context, store_v1::WatchPromotionsRequest());
   store_v1::PromotionsResponse message;
   while (reader->Read(&message)) {
+    if (message.heartbeat()) continue;  // nothing changed
     if (!on_change(promotions_from(message))) {
       context.TryCancel();
       break;

@@ -1,5 +1,6 @@
 #include "services/store/store_service.h"
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "services/common/access_control.h"
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
+#include "services/store/import_spool.h"
 #include "services/store/store_convert.h"
 #include "store/audit_trail.h"
 
@@ -39,7 +41,7 @@ bool same(const std::vector<store::Promotion>& a, const std::vector<store::Promo
 }
 
 // One ImportFinished: a hierarchy (four roles) and the end-to-end baseline, with room; its
-// blobs are held in memory until its one transaction commits.
+// blobs wait on disk (import_spool.h) until its one transaction commits.
 constexpr std::size_t kMaxImportRuns = 8;
 constexpr std::int64_t kMaxImportBytes = 256LL << 20;
 
@@ -86,11 +88,12 @@ std::string promoter(const grpc::ServerContext& context, const std::string& clai
 
 StoreServiceImpl::StoreServiceImpl(const std::string& path, CheckpointCheck check,
                                    StreamLimits* limits, store::DatabaseOptions options,
-                                   store::StoreQuotas quotas)
+                                   store::StoreQuotas quotas, std::int64_t max_transfer_bytes)
     : connections_(path, options, quotas),
       quotas_(quotas),
       check_(std::move(check)),
-      limits_(limits) {
+      limits_(limits),
+      transfers_(max_transfer_bytes, quotas.max_checkpoint_bytes) {
   if (!check_) throw_invalid_argument("check", "a checkpoint check", "none");
 }
 
@@ -214,6 +217,7 @@ grpc::Status StoreServiceImpl::SaveCheckpoint(
     grpc::ServerContext* context, grpc::ServerReader<store_v1::SaveCheckpointRequest>* reader,
     store_v1::CheckpointInfo* response) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "SaveCheckpoint");
     store_v1::SaveCheckpointRequest message;
     if (!reader->Read(&message) || !message.has_header()) {
       throw_invalid_argument("header", "a SaveCheckpointHeader as the first message",
@@ -223,7 +227,9 @@ grpc::Status StoreServiceImpl::SaveCheckpoint(
     BlobAssembler blob("checkpoint of run " + std::to_string(header.run_id()), header.size_bytes(),
                        header.checksum(), "header.size_bytes", "header.checksum",
                        quotas_.max_checkpoint_bytes);
+    const auto held = transfers_.reserve(*context, "SaveCheckpoint", header.size_bytes());
     while (reader->Read(&message)) {
+      slot.touch();
       if (!message.has_chunk()) {
         throw_invalid_argument("chunk", "the blob's bytes after the header", "a second header");
       }
@@ -258,9 +264,13 @@ grpc::Status StoreServiceImpl::SaveCheckpoint(
 }
 
 grpc::Status StoreServiceImpl::LoadCheckpoint(
-    grpc::ServerContext*, const store_v1::LoadCheckpointRequest* request,
+    grpc::ServerContext* context, const store_v1::LoadCheckpointRequest* request,
     grpc::ServerWriter<store_v1::LoadCheckpointResponse>* writer) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "LoadCheckpoint");
+    const auto held = transfers_.reserve(
+        *context, "LoadCheckpoint",
+        connections_.borrow()->checkpoint_info(request->checkpoint_id()).size_bytes);
     const store::Checkpoint checkpoint = connections_.borrow()->load_checkpoint(
         request->checkpoint_id());  // verified against its checksum, or DATA_LOSS
     store_v1::LoadCheckpointResponse message;
@@ -269,7 +279,9 @@ grpc::Status StoreServiceImpl::LoadCheckpoint(
     const bool sent = for_each_chunk(checkpoint.blob, [&](std::string_view chunk) {
       message.Clear();
       message.set_chunk(std::string(chunk));
-      return writer->Write(message);
+      if (!writer->Write(message)) return false;
+      slot.touch();
+      return true;
     });
     return sent ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
   });
@@ -308,20 +320,31 @@ grpc::Status StoreServiceImpl::ImportFinished(
     grpc::ServerContext* context, grpc::ServerReader<store_v1::ImportFinishedRequest>* reader,
     store_v1::ImportFinishedResponse* response) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "ImportFinished");
+    // Each blob arrives whole (held against the transfer budget), is checked as a replica
+    // would serve it, written to the spool and dropped; the one transaction that stores the
+    // import reads them back one at a time.
+    ImportSpool spool(connections_.path());
     std::vector<store::FinishedRun> runs;
     std::optional<BlobAssembler> blob;
+    std::optional<TransferBudget::Reservation> held;
+    std::int64_t largest = 0;
     bool promote = false;
-    // Each blob checked as a replica would serve it before anything is stored.
     const auto finish_run = [&] {
       if (!blob) return;
-      runs.back().blob = blob->take();
       const std::string field = "runs[" + std::to_string(runs.size() - 1) + "]";
-      check_(runs.back().spec.role, runs.back().blob, field + ".checkpoint");
+      const std::vector<std::uint8_t> bytes = blob->take();
+      check_(runs.back().spec.role, bytes, field + ".checkpoint");
+      const ImportSpool::Segment segment = spool.write(bytes);
+      runs.back().read_blob = [&spool, segment] { return spool.read(segment); };
+      largest = std::max(largest, segment.size);
+      blob.reset();
+      held.reset();
     };
-    // The import commits in one transaction, so its blobs are held until it ends: bounded.
-    std::int64_t declared = 0;
+    std::int64_t declared = 0;  // bounds the spool
     store_v1::ImportFinishedRequest message;
     while (reader->Read(&message)) {
+      slot.touch();
       if (message.has_run()) {
         finish_run();
         const auto& run = message.run();
@@ -339,6 +362,7 @@ grpc::Status StoreServiceImpl::ImportFinished(
                           std::to_string(kMaxImportBytes) +
                           " bytes one import may bring: import in several parts");
         }
+        held.emplace(transfers_.reserve(*context, "ImportFinished", run.size_bytes()));
         runs.push_back({from_proto(run.spec()), {}});
       } else {
         if (!blob) throw_invalid_argument("run", "a run header before its chunks", "a chunk");
@@ -346,6 +370,7 @@ grpc::Status StoreServiceImpl::ImportFinished(
       }
     }
     finish_run();
+    const auto committing = transfers_.reserve(*context, "ImportFinished", largest);
     const auto ids = connections_.borrow()->import_finished(
         runs, promote, promote ? promoter(*context, "") : std::string());
     if (promote) promotions_changed_.bump();
@@ -399,7 +424,7 @@ grpc::Status StoreServiceImpl::WatchPromotions(
     grpc::ServerContext* context, const store_v1::WatchPromotionsRequest*,
     grpc::ServerWriter<store_v1::PromotionsResponse>* writer) {
   return guarded([&] {
-    auto slot = admit_stream(limits_, *context, "WatchPromotions", StreamLimits::Idle::kKeep);
+    auto slot = admit_stream(limits_, *context, "WatchPromotions");
     std::uint64_t seen = promotions_changed_.version();
     std::vector<store::Promotion> sent = connections_.borrow()->promotions();
     store_v1::PromotionsResponse message;
@@ -407,17 +432,23 @@ grpc::Status StoreServiceImpl::WatchPromotions(
     if (!writer->Write(message)) return grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
     slot.touch();
     auto last_read = std::chrono::steady_clock::now();
+    auto last_write = last_read;
     while (!context->IsCancelled() && !stopping_) {
       const std::uint64_t now_seen = promotions_changed_.wait_past(seen, kWatchPoll);
       const auto now = std::chrono::steady_clock::now();
-      if (now_seen == seen && now - last_read < kWatchRecheck) continue;
-      seen = now_seen;
-      last_read = now;
-      auto current = connections_.borrow()->promotions();
-      if (same(current, sent)) continue;
-      sent = std::move(current);
-      fill(sent, message);
+      bool changed = false;
+      if (now_seen != seen || now - last_read >= kWatchRecheck) {
+        seen = now_seen;
+        last_read = now;
+        auto current = connections_.borrow()->promotions();
+        changed = !same(current, sent);
+        if (changed) sent = std::move(current);
+      }
+      if (!changed && now - last_write < slot.heartbeat_interval()) continue;
+      if (changed) fill(sent, message);
+      message.set_heartbeat(!changed);  // else the same set, to show the watch is alive
       if (!writer->Write(message)) break;
+      last_write = std::chrono::steady_clock::now();
       slot.touch();
     }
     return stopping_ ? grpc::Status(grpc::StatusCode::UNAVAILABLE, "the store server is stopping")
@@ -448,6 +479,13 @@ grpc::Status StoreServiceImpl::CollectGarbage(grpc::ServerContext*,
 grpc::Status StoreServiceImpl::Backup(grpc::ServerContext* context, const store_v1::BackupRequest*,
                                       grpc::ServerWriter<store_v1::BackupResponse>* writer) {
   return guarded([&] {
+    auto slot = admit_stream(limits_, *context, "Backup");
+    // One at a time: each is a whole copy of the store on its volume.
+    const std::unique_lock one_backup(backup_mutex_, std::try_to_lock);
+    if (!one_backup.owns_lock()) {
+      throw Error(ErrorCode::kResourceExhausted,
+                  "Backup: another backup is being made on this store server; retry when it ends");
+    }
     // The copy is made beside the store (same file system, so it costs no network and the
     // disk is one the operator already sizes) and removed once sent.
     const std::string copy =
@@ -465,7 +503,9 @@ grpc::Status StoreServiceImpl::Backup(grpc::ServerContext* context, const store_
     const bool sent = for_each_file_chunk(copy, [&](std::string_view chunk) {
       message.Clear();
       message.set_chunk(std::string(chunk));
-      return !context->IsCancelled() && writer->Write(message);
+      if (context->IsCancelled() || !writer->Write(message)) return false;
+      slot.touch();
+      return true;
     });
     return sent ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "caller left");
   });

@@ -21,6 +21,7 @@
 #include "services/store/promotion_feed.h"
 #include "services/store/store_connections.h"
 #include "services/store/store_convert.h"
+#include "services/store/transfer_budget.h"
 #include "store/audit_trail.h"
 
 namespace pnp::services {
@@ -30,13 +31,19 @@ namespace pnp::services {
 using CheckpointCheck = std::function<void(
     std::string_view role, std::span<const std::uint8_t> bytes, std::string_view field)>;
 
+// pnp-store-server's --max-transfer-mb: four of the largest checkpoints it takes by default.
+inline constexpr std::int64_t kDefaultMaxTransferBytes = 256LL << 20;
+
 class StoreServiceImpl final : public store_v1::StoreService::Service {
  public:
   // `check` runs on every imported checkpoint before it is stored and on every checkpoint
-  // before a promotion commits. `limits`: caps WatchPromotions streams (may be null).
-  // `quotas`: what a checkpoint, a run and a principal may hold (store/store_quotas.h).
+  // before a promotion commits. `limits`: caps the streaming calls (watches and checkpoint
+  // transfers; may be null). `quotas`: what a checkpoint, a run and a principal may hold
+  // (store/store_quotas.h). `max_transfer_bytes`: checkpoint bytes held in memory for
+  // transfers at once (transfer_budget.h).
   StoreServiceImpl(const std::string& path, CheckpointCheck check, StreamLimits* limits = nullptr,
-                   store::DatabaseOptions options = {}, store::StoreQuotas quotas = {});
+                   store::DatabaseOptions options = {}, store::StoreQuotas quotas = {},
+                   std::int64_t max_transfer_bytes = kDefaultMaxTransferBytes);
   // Ends the watch streams (call before the server shuts down).
   void stop_watches() { stopping_ = true; }
 
@@ -101,6 +108,8 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
   std::mutex audit_mutex_;
   store::AuditSink audit_sink_;
   StreamLimits* limits_;
+  TransferBudget transfers_;
+  std::mutex backup_mutex_;  // held by the one Backup being made
   PromotionFeed promotions_changed_;
   std::atomic<bool> stopping_{false};
 };

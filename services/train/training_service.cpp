@@ -128,36 +128,40 @@ grpc::Status TrainingServiceImpl::WatchTrainingRun(
     grpc::ServerContext* context, const WatchTrainingRunRequest* request,
     grpc::ServerWriter<WatchTrainingRunResponse>* writer) {
   return guarded([&] {
-    // Counted, never closed for idleness: a queued run's watch is quiet until it starts.
-    const auto slot =
-        admit_stream(limits_, *context, "WatchTrainingRun", StreamLimits::Idle::kKeep);
+    // A queued run's watch is quiet until the run starts: heartbeats keep it open.
+    auto slot = admit_stream(limits_, *context, "WatchTrainingRun");
     const std::int64_t id = require_run_id(request->run_id());
     std::uint64_t seen = manager_.generation();
     store::RunRecord run = manager_.get(id);
     const auto so_far = manager_.metrics(id);  // the watch starts from now
     long long sent_steps = so_far.empty() ? -1 : so_far.back().env_steps;
-    WatchTrainingRunResponse first;
-    fill(run, *first.mutable_run());
-    if (!writer->Write(first)) return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
+    auto last_write = std::chrono::steady_clock::now();
+    const auto send = [&](const store::MetricPoint* point, bool heartbeat) {
+      WatchTrainingRunResponse message;
+      fill(run, *message.mutable_run());
+      if (point != nullptr) to_proto(*point, *message.mutable_metric());
+      message.set_heartbeat(heartbeat);
+      if (!writer->Write(message)) return false;
+      last_write = std::chrono::steady_clock::now();
+      slot.touch();
+      return true;
+    };
+    if (!send(nullptr, false)) return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
     while (!store::is_terminal(run.state)) {
       if (context->IsCancelled())
         return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled by the client");
       seen = manager_.wait_for_change(seen, kWatchPoll);
       run = manager_.get(id);
       const auto metrics = manager_.metrics_after(id, sent_steps);  // the new points only
-      const bool finished = store::is_terminal(run.state);
       for (const auto& point : metrics) {
         sent_steps = point.env_steps;
-        WatchTrainingRunResponse message;
-        fill(run, *message.mutable_run());
-        to_proto(point, *message.mutable_metric());
-        if (!writer->Write(message))
-          return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
+        if (!send(&point, false)) return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
       }
-      if (finished) {  // the final state, after the last evaluation
-        WatchTrainingRunResponse last;
-        fill(run, *last.mutable_run());
-        writer->Write(last);
+      const bool finished = store::is_terminal(run.state);
+      const bool quiet = std::chrono::steady_clock::now() - last_write >= slot.heartbeat_interval();
+      if (finished || quiet) {  // the final state, after the last evaluation; or a heartbeat
+        if (!send(nullptr, !finished))
+          return grpc::Status(grpc::StatusCode::CANCELLED, "client gone");
       }
     }
     return grpc::Status::OK;

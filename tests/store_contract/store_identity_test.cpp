@@ -95,7 +95,8 @@ class StoreIdentity : public ::testing::Test {
         db_, rl::probe_checkpoint, limits_.get(), store::DatabaseOptions{},
         store::StoreQuotas{.max_checkpoint_bytes = 4 << 20,
                            .max_run_checkpoint_bytes = 16 << 20,
-                           .max_open_runs_per_principal = 3});
+                           .max_open_runs_per_principal = 3},
+        /*max_transfer_bytes=*/8 << 20);
     ServerSecurity security;
     security.tls = {(dir_ / "certs" / "server.pem").string(),
                     (dir_ / "certs" / "server.key").string(), "", 10};
@@ -255,6 +256,12 @@ TEST_F(StoreIdentity, ACheckpointThatAReplicaCouldNotServeIsNeverPromotedOrImpor
   EXPECT_NE(message.find("runs[0].checkpoint"), std::string::npos) << message;
   EXPECT_TRUE(as("ops")->promotions().empty());
   EXPECT_EQ(as("ops")->list_runs({}).size(), 2u);  // the two trained runs; nothing imported
+  // The import's spool went with it.
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(fs::path(db_).filename().string() + ".import-"),
+              std::string::npos)
+        << entry.path();
+  }
 }
 
 TEST_F(StoreIdentity, ARunsOwnerIsTheAuthenticatedPrincipalAndNoOtherCanWriteAsIt) {
@@ -342,6 +349,44 @@ TEST_F(StoreIdentity, AReaderCannotTakeTheWatchSlotsAnotherPrincipalNeeds) {
   auto inference = stub("inference");
   const Watch replica(*inference);
   EXPECT_TRUE(replica.admitted) << replica.status.error_message();
+}
+
+// An upload held open, as a slow or stalled trainer would.
+struct OpenUpload {
+  OpenUpload(v1::StoreService::Stub& stub, std::int64_t run_id) {
+    writer = stub.SaveCheckpoint(&context, &response);
+    v1::SaveCheckpointRequest header;
+    header.mutable_header()->set_run_id(run_id);
+    header.mutable_header()->set_size_bytes(3 << 20);
+    header.mutable_header()->set_checksum("0123456789abcdef");
+    header.mutable_header()->mutable_evaluated()->set_env_steps(1);
+    writer->Write(header);
+  }
+  grpc::Status finish() {
+    writer->WritesDone();
+    return writer->Finish();
+  }
+  grpc::ClientContext context;
+  v1::CheckpointInfo response;
+  std::unique_ptr<grpc::ClientWriter<v1::SaveCheckpointRequest>> writer;
+};
+
+TEST_F(StoreIdentity, CheckpointTransfersAreCountedAgainstTheirPrincipalsStreams) {
+  const auto first = trained("approach", "approach", checked_in("approach"));
+  OpenUpload held(*stub("approach"), first.run_id);
+  // The same principal's next transfer finds its one stream taken...
+  OpenUpload second(*stub("approach"), first.run_id);
+  const grpc::Status refused = second.finish();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(refused.error_message().find("SaveCheckpoint"), std::string::npos)
+      << refused.error_message();
+  EXPECT_NE(refused.error_message().find("--max-streams-per-principal"), std::string::npos)
+      << refused.error_message();
+  // ...while another trainer saves and loads as usual.
+  const auto other = trained("retract", "retract", checked_in("retract"));
+  EXPECT_EQ(as("retract")->load_checkpoint(other.id).blob, checked_in("retract"));
+  held.context.TryCancel();
+  held.finish();
 }
 
 }  // namespace

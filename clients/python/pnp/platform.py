@@ -41,6 +41,8 @@ class Run:
         stub, address = self.platform._training(self.role)
         try:
             for message in stub.WatchTrainingRun(train.WatchTrainingRunRequest(run_id=self.run_id)):
+                if message.heartbeat:  # nothing happened; the server shows it is alive
+                    continue
                 yield {"run": records.run_record(message.run),
                        "metric": records.metric_record(message.metric)
                        if message.HasField("metric") else None}
