@@ -45,6 +45,8 @@ int http_status(ErrorCode code) {
       return 400;
     case ErrorCode::kNotFound:
       return 404;
+    case ErrorCode::kPermissionDenied:
+      return 403;
     case ErrorCode::kFailedPrecondition:
       return 409;
     case ErrorCode::kUnavailable:

@@ -6,13 +6,12 @@
 #include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/table.h"
 #include "common/error.h"
+#include "common/roles.h"
 #include "plot/line_chart_svg.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 
 namespace pnp::pnpctl {
 namespace {
-
-constexpr const char* kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
 
 std::vector<train::v1::MetricPoint> fetch_metrics(const Endpoints& endpoints,
                                                   const std::string& address, std::int64_t id) {
@@ -44,7 +43,7 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
                "to_target", "checkpoint", "error"});
   std::vector<std::string> roles;
   if (role.empty()) {
-    roles.assign(std::begin(kRoles), std::end(kRoles));
+    for (const std::string_view r : kRoles) roles.emplace_back(r);
   } else {
     endpoints.training(role);  // refuses an unknown role
     roles = {role};

@@ -22,6 +22,8 @@ std::string_view to_string(ErrorCode code) {
       return "ABORTED";
     case ErrorCode::kCancelled:
       return "CANCELLED";
+    case ErrorCode::kPermissionDenied:
+      return "PERMISSION_DENIED";
     case ErrorCode::kInternal:
       return "INTERNAL";
   }

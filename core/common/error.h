@@ -18,6 +18,7 @@ enum class ErrorCode {
   kUnavailable,         // a resource is busy or unreachable: retrying may succeed
   kAborted,             // lost a race for shared state (another owner holds it): re-read
   kCancelled,           // the work was cancelled by its caller
+  kPermissionDenied,    // an authenticated caller asked for what its identity may not do
   kInternal,            // a broken invariant inside the core
 };
 

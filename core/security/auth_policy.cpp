@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/roles.h"
 #include "security/sha256.h"
 
 namespace pnp::security {
@@ -25,13 +26,33 @@ std::string text_field(const nlohmann::json& entry, const char* key, const std::
   return value.get<std::string>();
 }
 
+// "roles": optional, but when given a non-empty list of known roles: an empty list would
+// read as "none" and mean "all".
+std::set<std::string, std::less<>> parse_roles(const nlohmann::json& entry,
+                                               const std::string& where) {
+  std::set<std::string, std::less<>> roles;
+  if (!entry.contains("roles")) return roles;
+  const auto& list = entry.at("roles");
+  const std::string expected = "a non-empty list of approach, manipulate, retract, hlc, e2e";
+  if (!list.is_array() || list.empty())
+    throw_invalid_argument(where + ".roles", expected, list.dump());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!list[i].is_string() || !is_known_role(list[i].get<std::string>())) {
+      throw_invalid_argument(where + ".roles[" + std::to_string(i) + "]",
+                             "approach, manipulate, retract, hlc or e2e", list[i].dump());
+    }
+    roles.insert(list[i].get<std::string>());
+  }
+  return roles;
+}
+
 PolicyPrincipal parse_principal(const nlohmann::json& entry, const std::string& where) {
   if (!entry.is_object()) throw_invalid_argument(where, "an object", entry.dump());
   for (const auto& [key, value] : entry.items()) {
     if (key != "name" && key != "token_sha256" && key != "cert_cn" && key != "cert_san" &&
-        key != "classes") {
+        key != "classes" && key != "roles") {
       throw_invalid_argument(where + "." + key,
-                             "one of name, token_sha256, cert_cn, cert_san, classes",
+                             "one of name, token_sha256, cert_cn, cert_san, classes, roles",
                              "an unknown key");
     }
   }
@@ -70,6 +91,7 @@ PolicyPrincipal parse_principal(const nlohmann::json& entry, const std::string& 
       throw_invalid_argument(field, "reader, agent, operator or robot", classes[i].dump());
     p.classes.insert(*parsed);
   }
+  p.roles = parse_roles(entry, where);
   return p;
 }
 
@@ -185,6 +207,7 @@ AccessDecision decide_access(const AuthPolicy& policy, const PresentedCredential
   }
   d.outcome = Outcome::kAllowed;
   d.classes = who->classes;
+  d.roles = who->roles;
   return d;
 }
 

@@ -3,13 +3,16 @@
 //
 //   {"principals": [
 //     {"name": "ops", "token_sha256": "<64 hex>", "classes": ["reader", "operator"]},
-//     {"name": "gateway", "cert_cn": "gateway", "classes": ["agent", "robot"]}]}
+//     {"name": "gateway", "cert_cn": "gateway", "classes": ["agent", "robot"]},
+//     {"name": "approach", "cert_cn": "approach", "classes": ["reader", "agent", "service"],
+//      "roles": ["approach"]}]}
 //
 // A principal is recognised by a bearer token (stored as its SHA-256 only, compared in
 // constant time) and/or by its mutual-TLS client certificate (subject CN, or a SAN).
 // Parsing refuses anything it does not understand (an unknown key, class or a malformed
 // hash), naming the field: a typo in a security policy must not silently grant or deny.
 
+#include <functional>
 #include <optional>
 #include <set>
 #include <span>
@@ -27,6 +30,10 @@ struct PolicyPrincipal {
   std::string cert_cn;       // empty: not by certificate subject
   std::string cert_san;      // empty: not by certificate SAN
   std::set<AccessClass> classes;
+  // The training roles whose runs it may create, claim and count (common/roles.h): a
+  // trainer's identity bound to its own queue, so that breaking into the approach Pod does
+  // not give the retract runs. Empty: every role.
+  std::set<std::string, std::less<>> roles{};
 };
 
 class AuthPolicy {
@@ -62,7 +69,8 @@ struct AccessDecision {
   Outcome outcome = Outcome::kUnauthenticated;
   std::string principal;  // who, when recognised
   std::string message;    // for the caller: names the RPC and what it needs, never a token
-  std::set<AccessClass> classes{};  // what the policy grants them, when allowed
+  std::set<AccessClass> classes{};             // what the policy grants them, when allowed
+  std::set<std::string, std::less<>> roles{};  // the roles they are bound to (empty: all)
 };
 
 // Decides one call of `rpc` (its method path) that requires `requirement`; `requirement`

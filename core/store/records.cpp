@@ -37,8 +37,4 @@ bool is_terminal(RunState state) {
          state == RunState::kCancelled;
 }
 
-bool is_known_role(std::string_view role) {
-  return std::find(std::begin(kRoles), std::end(kRoles), role) != std::end(kRoles);
-}
-
 }  // namespace pnp::store

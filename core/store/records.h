@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "common/roles.h"
+
 namespace pnp::store {
 
 enum class RunState { kPending, kRunning, kSucceeded, kFailed, kCancelled };
@@ -15,13 +17,13 @@ std::string_view run_state_name(RunState state);
 RunState parse_run_state(std::string_view name, std::string_view field = "state");
 bool is_terminal(RunState state);
 
-// The roles a run or a checkpoint can have; anything else is refused.
-inline constexpr std::string_view kRoles[] = {"approach", "manipulate", "retract", "hlc", "e2e"};
+// The roles a run or a checkpoint can have (common/roles.h); anything else is refused.
+using pnp::is_known_role;
+using pnp::kRoles;
 
 // The longest idempotency key of a run's creation (Store::create_run's request_id), as a
 // server scopes it ("<principal>/<client's key>", a client's key at most 128 bytes).
 inline constexpr std::size_t kMaxRequestIdBytes = 512;
-bool is_known_role(std::string_view role);
 
 using Millis = std::int64_t;  // Unix time in milliseconds
 

@@ -80,6 +80,7 @@ class PolicyProcessor final : public grpc::AuthMetadataProcessor {
       context->AddProperty(kPrincipalProperty, decision.principal);
       for (const security::AccessClass c : decision.classes)
         context->AddProperty(kClassProperty, std::string(security::access_class_name(c)));
+      for (const std::string& role : decision.roles) context->AddProperty(kRoleProperty, role);
       return grpc::Status::OK;
     }
     const bool unauthenticated = decision.outcome == Outcome::kUnauthenticated;
@@ -234,6 +235,24 @@ bool caller_holds(const grpc::ServerContextBase& context, security::AccessClass 
   for (const auto& value : auth->FindPropertyValues(kClassProperty))
     if (std::string_view(value.data(), value.size()) == wanted) return true;
   return false;
+}
+
+void require_role(const grpc::ServerContextBase& context, std::string_view role,
+                  std::string_view field) {
+  const auto auth = context.auth_context();
+  if (!auth) return;
+  const auto bound = auth->FindPropertyValues(kRoleProperty);
+  if (bound.empty()) return;
+  std::string listed;
+  for (const auto& value : bound) {
+    const std::string_view name(value.data(), value.size());
+    if (name == role) return;
+    listed += (listed.empty() ? "" : ", ") + std::string(name);
+  }
+  throw Error(ErrorCode::kPermissionDenied, std::string(field) + ": principal \"" +
+                                                principal_of(context) + "\" acts for the roles " +
+                                                listed + " only (its policy's \"roles\"), not \"" +
+                                                std::string(role) + "\"");
 }
 
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(

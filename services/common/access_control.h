@@ -26,12 +26,20 @@ inline constexpr const char* kPrincipalProperty = "pnp_principal";
 // The AuthContext property holding each access class the allowed caller was granted.
 inline constexpr const char* kClassProperty = "pnp_class";
 
+// The AuthContext property holding each training role the allowed caller is bound to.
+inline constexpr const char* kRoleProperty = "pnp_role";
+
 // The caller's principal as the processor recorded it; empty without a policy.
 std::string principal_of(const grpc::ServerContextBase& context);
 
 // Whether the policy grants the caller `access_class`; false without a policy (check
 // principal_of first: without a policy every caller may do everything).
 bool caller_holds(const grpc::ServerContextBase& context, security::AccessClass access_class);
+
+// Throws PERMISSION_DENIED naming `field` unless the caller may act for training `role`:
+// no policy, a principal bound to no roles, or one whose "roles" list it.
+void require_role(const grpc::ServerContextBase& context, std::string_view role,
+                  std::string_view field);
 
 // Refused operator and robot calls also go to `audit` (may be null; must outlive the server).
 std::shared_ptr<grpc::AuthMetadataProcessor> make_policy_processor(

@@ -22,6 +22,8 @@ grpc::StatusCode status_code(ErrorCode code) {
       return grpc::StatusCode::ABORTED;
     case ErrorCode::kCancelled:
       return grpc::StatusCode::CANCELLED;
+    case ErrorCode::kPermissionDenied:
+      return grpc::StatusCode::PERMISSION_DENIED;
     case ErrorCode::kInternal:
       return grpc::StatusCode::INTERNAL;
   }
@@ -72,6 +74,9 @@ void throw_if_error(const grpc::Status& status, std::string_view what, std::stri
       throw Error(ErrorCode::kCancelled, message);
     case grpc::StatusCode::ABORTED:
       throw Error(ErrorCode::kAborted, message);
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::UNAUTHENTICATED:
+      throw Error(ErrorCode::kPermissionDenied, message);
     case grpc::StatusCode::UNAVAILABLE:
     case grpc::StatusCode::DEADLINE_EXCEEDED:
       throw Error(ErrorCode::kUnavailable, message);

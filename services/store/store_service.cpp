@@ -106,6 +106,7 @@ grpc::Status StoreServiceImpl::CreateRun(grpc::ServerContext* context,
                              "at most " + std::to_string(kMaxClientRequestIdBytes) + " bytes",
                              std::to_string(request->request_id().size()) + " bytes");
     }
+    require_role(*context, request->spec().role(), "spec.role");
     // One principal's key never names another's run.
     const std::string key =
         request->request_id().empty() ? "" : owner_of(*context, request->request_id());
@@ -150,6 +151,7 @@ grpc::Status StoreServiceImpl::ClaimNextRun(grpc::ServerContext* context,
                                             const store_v1::ClaimNextRunRequest* request,
                                             store_v1::ClaimNextRunResponse* response) {
   return guarded([&] {
+    require_role(*context, request->role(), "role");
     const auto lease = lease_from_proto(request->lease_ms(), "lease_ms");
     if (auto run = connections_.borrow()->claim_next(request->role(),
                                                      owner_of(*context, request->owner()), lease))
@@ -182,6 +184,7 @@ grpc::Status StoreServiceImpl::CountClaimable(grpc::ServerContext* context,
                                               const store_v1::CountClaimableRequest* request,
                                               store_v1::CountClaimableResponse* response) {
   return guarded([&] {
+    require_role(*context, request->role(), "role");
     response->set_count(connections_.borrow()->count_claimable(
         request->role(), owner_of(*context, request->owner())));
     return grpc::Status::OK;

@@ -37,14 +37,17 @@ namespace fs = std::filesystem;
 namespace v1 = ::pnp::store::v1;
 
 // Who calls the store, with the classes a deployment gives them (docs/RELIABILITY.md).
+// The approach trainer is bound to its role, as deploy/ binds each trainer; the retract
+// one is not (a policy without "roles": every role).
 struct Principal {
   const char* name;
   const char* classes;
+  const char* roles = nullptr;
 };
 constexpr Principal kPrincipals[] = {
     {"ops", R"("reader", "agent", "operator")"},
     {"inference", R"("reader", "service", "delegate")"},
-    {"approach", R"("reader", "agent", "service")"},
+    {"approach", R"("reader", "agent", "service")", R"("approach")"},
     {"retract", R"("reader", "agent", "service")"},
     {"dashboard", R"("reader")"},
 };
@@ -75,7 +78,8 @@ class StoreIdentity : public ::testing::Test {
       std::ofstream(token_file(p.name)) << token;
       if (policy.back() == '}') policy += ",";
       policy += std::string(R"({"name": ")") + p.name + R"(", "token_sha256": ")" +
-                security::sha256_hex(token) + R"(", "classes": [)" + p.classes + "]}";
+                security::sha256_hex(token) + R"(", "classes": [)" + p.classes + "]" +
+                (p.roles ? std::string(R"(, "roles": [)") + p.roles + "]" : std::string()) + "}";
     }
     std::ofstream(dir_ / "policy.json") << policy << "]}";
   }
@@ -387,6 +391,34 @@ TEST_F(StoreIdentity, CheckpointTransfersAreCountedAgainstTheirPrincipalsStreams
   EXPECT_EQ(as("retract")->load_checkpoint(other.id).blob, checked_in("retract"));
   held.context.TryCancel();
   held.finish();
+}
+
+TEST_F(StoreIdentity, ATrainerBoundToItsRoleCannotCreateClaimOrCountAnotherRolesRuns) {
+  store::RunSpec spec;
+  spec.role = "retract";
+  spec.algorithm = "ddpg_her";
+  spec.robot = "panda";
+  spec.object = "block";
+  auto approach = as("approach");
+  std::string message;
+  EXPECT_EQ(code_of([&] { approach->create_run(spec); }, &message), ErrorCode::kPermissionDenied);
+  EXPECT_NE(message.find("spec.role: principal \"approach\" acts for the roles approach only"),
+            std::string::npos)
+      << message;
+  const auto queued = as("retract")->create_run(spec);
+  EXPECT_EQ(code_of([&] { approach->claim_next("retract", "worker-1", std::chrono::seconds(60)); },
+                    &message),
+            ErrorCode::kPermissionDenied);
+  EXPECT_NE(message.find("not \"retract\""), std::string::npos) << message;
+  EXPECT_EQ(code_of([&] { approach->count_claimable("retract", "worker-1"); }),
+            ErrorCode::kPermissionDenied);
+  // Its own queue as before; the retract run waits for the retract trainer.
+  spec.role = "approach";
+  approach->create_run(spec);
+  EXPECT_EQ(approach->claim_next("approach", "worker-1", std::chrono::seconds(60))->spec.role,
+            "approach");
+  EXPECT_EQ(as("retract")->claim_next("retract", "worker-1", std::chrono::seconds(60))->id,
+            queued.id);
 }
 
 }  // namespace

@@ -123,6 +123,29 @@ TEST(AuthPolicy, RefusesWhatItDoesNotUnderstandNamingTheField) {
             std::string::npos);
 }
 
+TEST(AuthPolicy, RolesBindAPrincipalToKnownTrainingRolesOnly) {
+  const auto policy = AuthPolicy::parse(
+      R"({"principals": [{"name": "a", "cert_cn": "a", "classes": ["reader"],
+                          "roles": ["approach", "hlc"]},
+                         {"name": "b", "cert_cn": "b", "classes": ["reader"]}]})",
+      "p.json");
+  EXPECT_EQ(policy.principals()[0].roles, (std::set<std::string, std::less<>>{"approach", "hlc"}));
+  EXPECT_TRUE(policy.principals()[1].roles.empty());  // every role
+  auto parse = [](const std::string& roles) {
+    return [roles] {
+      AuthPolicy::parse(R"({"principals": [{"name": "a", "cert_cn": "a", "classes": ["reader"],
+                                            "roles": )" +
+                            roles + "}]}",
+                        "p.json");
+    };
+  };
+  EXPECT_NE(refusal(parse(R"(["aproach"])")).find("principals[0].roles[0]"), std::string::npos);
+  // An empty list would read as "none" and mean "all": refused.
+  EXPECT_NE(refusal(parse("[]")).find("principals[0].roles: expected a non-empty list"),
+            std::string::npos);
+  EXPECT_NE(refusal(parse(R"("approach")")).find("principals[0].roles"), std::string::npos);
+}
+
 TEST(AuthPolicy, AMissingPolicyFileIsNotFoundNamingTheFlag) {
   try {
     AuthPolicy::load("/nonexistent/policy.json");
