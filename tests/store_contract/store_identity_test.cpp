@@ -63,6 +63,16 @@ std::vector<std::uint8_t> checked_in(const std::string& role) {
   return read_bytes(fs::path(PNP_TEST_DATA_DIR) / "panda_block" / (role + ".ckpt"));
 }
 
+// A Panda block run of `role`, as a trainer creates it.
+store::RunSpec spec_of(const std::string& role) {
+  store::RunSpec spec;
+  spec.role = role;
+  spec.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
+  spec.robot = "panda";
+  spec.object = "block";
+  return spec;
+}
+
 class StoreIdentity : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -139,12 +149,7 @@ class StoreIdentity : public ::testing::Test {
                                 const std::vector<std::uint8_t>& blob,
                                 const std::string& instance = "worker-1") const {
     auto store = as(who);
-    store::RunSpec spec;
-    spec.role = role;
-    spec.algorithm = role == "hlc" ? "a3c" : "ddpg_her";
-    spec.robot = "panda";
-    spec.object = "block";
-    store->create_run(spec);
+    store->create_run(spec_of(role));
     const auto run = store->claim_next(role, instance, std::chrono::seconds(60));
     EXPECT_TRUE(run.has_value());
     return store->save_checkpoint(run->id, 1000, 0.9, blob, instance);
@@ -287,11 +292,7 @@ TEST_F(StoreIdentity, ARunsOwnerIsTheAuthenticatedPrincipalAndNoOtherCanWriteAsI
 }
 
 TEST_F(StoreIdentity, ACreationKeyIsScopedToThePrincipalThatSentIt) {
-  store::RunSpec spec;
-  spec.role = "approach";
-  spec.algorithm = "ddpg_her";
-  spec.robot = "panda";
-  spec.object = "block";
+  store::RunSpec spec = spec_of("approach");
   const auto mine = as("approach")->create_run(spec, "key-1");
   EXPECT_EQ(as("approach")->create_run(spec, "key-1").id, mine.id);
   // Another principal's identical key is its own: a run of its own, never the first's.
@@ -300,11 +301,7 @@ TEST_F(StoreIdentity, ACreationKeyIsScopedToThePrincipalThatSentIt) {
 }
 
 TEST_F(StoreIdentity, OnePrincipalCannotQueueMoreThanItsQuotaOfRuns) {
-  store::RunSpec spec;
-  spec.role = "approach";
-  spec.algorithm = "ddpg_her";
-  spec.robot = "panda";
-  spec.object = "block";
+  store::RunSpec spec = spec_of("approach");
   auto trainer = as("approach");
   for (int k = 0; k < 3; ++k) trainer->create_run(spec);
   std::string message;
@@ -394,11 +391,7 @@ TEST_F(StoreIdentity, CheckpointTransfersAreCountedAgainstTheirPrincipalsStreams
 }
 
 TEST_F(StoreIdentity, ATrainerBoundToItsRoleCannotCreateClaimOrCountAnotherRolesRuns) {
-  store::RunSpec spec;
-  spec.role = "retract";
-  spec.algorithm = "ddpg_her";
-  spec.robot = "panda";
-  spec.object = "block";
+  store::RunSpec spec = spec_of("retract");
   auto approach = as("approach");
   std::string message;
   EXPECT_EQ(code_of([&] { approach->create_run(spec); }, &message), ErrorCode::kPermissionDenied);
