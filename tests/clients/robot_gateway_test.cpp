@@ -558,6 +558,29 @@ TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
   EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
 }
 
+// On a real-time controller nothing renews a dry run's lease (it sends no target): it lapses
+// within the episode, and the dry run still plays to its end (it ended "the lease is now
+// held by \"\"" after half a second, exit 3, the README's first gateway command).
+TEST_F(GatewayEndToEnd, ADryRunOnARealTimeControllerOutlivesItsLease) {
+  arm_sim::StandInOptions options = lockstep();
+  options.clock = arm_sim::ClockMode::kRealTime;
+  arm_sim::ControllerStandIn arm(options);
+  services::RobotControllerServiceImpl controller_service(arm);
+  services::SimulatedSceneServiceImpl scene_service(arm);
+  services::ServerRuntime server(
+      services::ServerConfig{"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
+  const auto controller = link_to(server.port(), not_interrupted_);
+  controller->acquire_lease("test-gateway", std::chrono::milliseconds(200));
+  robot::GatewayConfig config = panda_config();
+  config.max_episode_steps = 20;  // 0.8 s: four lease timeouts
+  GatewayEpisodeRunner runner(config, *controller, *policy_stub_, recorder());
+  const EpisodeReport report = runner.run(episode(903, true), not_interrupted_);
+  EXPECT_EQ(report.end, EpisodeEnd::kStepCap) << report.reason;
+  EXPECT_EQ(count("target"), config.max_episode_steps);
+  EXPECT_EQ(arm.state().sequence, 0u);
+  server.shutdown(std::chrono::milliseconds(500));
+}
+
 // The trace is opt-in: one "cycle" event per cycle that planned a target and one
 // "arrival_wait" event per cycle that waited for the arm, in step order, with the grip
 // point, the object, the action and the subtask the policy chose.
