@@ -82,6 +82,10 @@ struct AuditArgs {
 int audit_command(const AuditArgs& args);
 // Several ids are promoted together, in one transaction (at most one per role).
 int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>& checkpoint_ids);
+// Promotes the latest checkpoint (the final model of a finished run) of each run, asking
+// the training service of `via` (every one shares the store).
+int promote_runs_command(const Endpoints& endpoints, const std::vector<std::int64_t>& run_ids,
+                         const std::string& via);
 
 struct PredictArgs {
   std::vector<double> observation, goal;  // given directly, or
@@ -92,9 +96,9 @@ struct PredictArgs {
 };
 int predict_command(const Endpoints& endpoints, const PredictArgs& args);
 // Checks the named services (sim, approach, manipulate, retract, hlc, e2e, inference);
-// 0 when every one is SERVING.
+// 0 when every one is SERVING but those in `optional`, which are shown and never fail it.
 int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
-                   double timeout_s);
+                   double timeout_s, const std::vector<std::string>& optional = {});
 struct EvaluateArgs {
   std::string robot = "fetch", object = "block";
   std::string world{sim::world_profile_name(sim::kDefaultWorldProfile)};

@@ -1,7 +1,10 @@
 #pragma once
 // Where each service listens, and how to reach it: plaintext, TLS or mutual TLS, with or
-// without a bearer token (--tls-ca, --tls-cert, --tls-key, --token-file). The defaults are
-// the platform's conventional loopback ports (scripts/run and deploy/ use the same).
+// without a bearer token (--tls-ca, --tls-cert, --tls-key, --token-file). Every client
+// finds the platform the same way (pnpctl, the Python package, the examples): a flag, then
+// its environment variable (PNP_SIM_ADDRESS, ...), then an endpoints file (--endpoints or
+// PNP_ENDPOINTS; else runs/platform/endpoints.json when it exists: scripts/run writes it
+// while the platform runs), then the conventional loopback ports (deploy/ uses the same).
 
 #include <grpcpp/grpcpp.h>
 
@@ -25,6 +28,9 @@ struct Endpoints {
   std::string robot_controller = "127.0.0.1:50070";  // not in kAllServices: not the platform's
   std::string store = "127.0.0.1:50050";  // pnp-store-server; not in kAllServices: optional
   services::ClientTlsFiles tls;           // the same for every service
+  // The endpoints file the addresses not given by flag or environment came from; empty:
+  // none (the defaults). Named in an UNAVAILABLE error: the file may be stale.
+  std::string endpoints_file;
 
   // A channel to `address` with the credentials above (INVALID_ARGUMENT naming the flag
   // for a bad address or file).
@@ -43,6 +49,17 @@ struct Endpoints {
 inline constexpr const char* kAllServices[] = {"sim", "approach", "manipulate", "retract",
                                                "hlc", "e2e",      "inference"};
 
+// The file scripts/run writes, read when neither --endpoints nor PNP_ENDPOINTS names one.
+inline constexpr const char* kDefaultEndpointsFile = "runs/platform/endpoints.json";
+
 void add_endpoint_options(CLI::App& app, Endpoints& endpoints);
+
+// After parsing: the endpoints file's addresses for every service whose flag and variable
+// were not given. INVALID_ARGUMENT naming the file and the key for a file that is not a
+// JSON object of known names to addresses (or NOT_FOUND for a named file that is missing).
+void apply_endpoints_file(const CLI::App& app, Endpoints& endpoints);
+
+// `message`, with a hint when the addresses came from an endpoints file that may be stale.
+std::string with_endpoints_hint(const Endpoints& endpoints, const std::string& message);
 
 }  // namespace pnp::pnpctl

@@ -201,8 +201,22 @@ int main(int argc, char** argv) {
   std::vector<std::int64_t> promote_ids;
   auto* promote_cmd = app.add_subcommand(
       "promote", "serve checkpoints for their roles (several: all at once, one per role)");
-  promote_cmd->add_option("CHECKPOINT", promote_ids, "checkpoint ids")->required();
-  promote_cmd->callback([&] { command = [&] { return promote_command(endpoints, promote_ids); }; });
+  std::vector<std::int64_t> promote_runs;
+  auto* promote_checkpoints = promote_cmd->add_option("CHECKPOINT", promote_ids, "checkpoint ids");
+  promote_cmd
+      ->add_option("--run", promote_runs,
+                   "instead: each run's latest checkpoint (a finished run's final model)")
+      ->excludes(promote_checkpoints);
+  promote_cmd->add_option("--via", metrics_role, "training service to ask about --run")
+      ->capture_default_str();
+  promote_cmd->callback([&] {
+    if (promote_ids.empty() && promote_runs.empty())
+      throw CLI::RequiredError("CHECKPOINT or --run");
+    command = [&] {
+      return promote_runs.empty() ? promote_command(endpoints, promote_ids)
+                                  : promote_runs_command(endpoints, promote_runs, metrics_role);
+    };
+  });
 
   PredictArgs predict;
   auto* predict_cmd = app.add_subcommand(
@@ -221,11 +235,20 @@ int main(int argc, char** argv) {
 
   std::vector<std::string> services(std::begin(kAllServices), std::end(kAllServices));
   double timeout_s = 2;
-  auto* health_cmd = app.add_subcommand("health", "check every service's health");
-  health_cmd->add_option("--only", services, "services to check")->delimiter(',');
+  auto* health_cmd = app.add_subcommand(
+      "health",
+      "check every service's health (exit 1 if one is not serving; the end-to-end baseline, "
+      "which scripts/run does not start, only when named in --only)");
+  auto* health_only =
+      health_cmd->add_option("--only", services, "services to check")->delimiter(',');
   health_cmd->add_option("--timeout", timeout_s, "seconds per check")->capture_default_str();
-  health_cmd->callback(
-      [&] { command = [&] { return health_command(endpoints, services, timeout_s); }; });
+  health_cmd->callback([&] {
+    command = [&] {
+      const std::vector<std::string> optional =
+          health_only->count() > 0 ? std::vector<std::string>{} : std::vector<std::string>{"e2e"};
+      return health_command(endpoints, services, timeout_s, optional);
+    };
+  });
 
   EvaluateArgs evaluate;
   auto* evaluate_cmd = app.add_subcommand(
@@ -311,9 +334,13 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    apply_endpoints_file(app, endpoints);
     return command();
   } catch (const pnp::Error& e) {
-    std::fprintf(stderr, "pnpctl: error: %s\n", e.what());
+    const std::string message = e.code() == pnp::ErrorCode::kUnavailable
+                                    ? with_endpoints_hint(endpoints, e.what())
+                                    : std::string(e.what());
+    std::fprintf(stderr, "pnpctl: error: %s\n", message.c_str());
     return e.code() == pnp::ErrorCode::kInvalidArgument ? 2 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pnpctl: error: %s\n", e.what());

@@ -132,7 +132,7 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
   // The four together, in one transaction: the inference service never serves new experts
   // under an old choreographer.
   const std::vector<std::int64_t> hierarchy{trained[0], trained[1], trained[2],
-                                             results.back().run.latest_checkpoint_id()};
+                                            results.back().run.latest_checkpoint_id()};
   promote_command(endpoints, hierarchy);
   wait_until_served(endpoints, results.back().run.latest_checkpoint_id(), args.wait_s);
   const ServiceEvaluation held_out = evaluate_through_services(

@@ -1,4 +1,5 @@
 // promote, predict, health and evaluate: the inference side and the platform's health.
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "clients/pnpctl/commands.h"
@@ -9,6 +10,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
+#include "pnp/train/v1/train_service.grpc.pb.h"
 #include "services/common/convert.h"
 
 namespace pnp::pnpctl {
@@ -28,6 +30,26 @@ int promote_command(const Endpoints& endpoints, const std::vector<std::int64_t>&
                                   : "NOT the run's latest: an intermediate model");
   }
   return 0;
+}
+
+int promote_runs_command(const Endpoints& endpoints, const std::vector<std::int64_t>& run_ids,
+                         const std::string& via) {
+  const std::string& address = endpoints.training(via);
+  auto stub = train::v1::TrainingService::NewStub(endpoints.channel(address));
+  std::vector<std::int64_t> checkpoint_ids;
+  for (const std::int64_t run_id : run_ids) {
+    train::v1::GetTrainingRunRequest request;
+    request.set_run_id(run_id);
+    train::v1::GetTrainingRunResponse response;
+    check(stub->GetTrainingRun(context_with_deadline().get(), request, &response), "GetTrainingRun",
+          address);
+    if (response.run().latest_checkpoint_id() == 0) {
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "--run " + std::to_string(run_id) + ": the run has no checkpoint yet");
+    }
+    checkpoint_ids.push_back(response.run().latest_checkpoint_id());
+  }
+  return promote_command(endpoints, checkpoint_ids);
 }
 
 namespace {
@@ -96,7 +118,7 @@ int predict_command(const Endpoints& endpoints, const PredictArgs& args) {
 }
 
 int health_command(const Endpoints& endpoints, const std::vector<std::string>& services,
-                   double timeout_s) {
+                   double timeout_s, const std::vector<std::string>& optional) {
   Table table({"service", "address", "status"});
   int failures = 0;
   for (const auto& name : services) {
@@ -114,10 +136,19 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
     } else {
       text = grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
     }
-    failures += text == "SERVING" ? 0 : 1;
+    const bool may_be_down = std::find(optional.begin(), optional.end(), name) != optional.end();
+    if (text != "SERVING" && may_be_down) {
+      text += " (optional)";
+    } else if (text != "SERVING") {
+      ++failures;
+    }
     table.add({name, address, text});
   }
   table.print(stdout);
+  if (failures > 0 && !endpoints.endpoints_file.empty())
+    std::fprintf(
+        stderr, "%s\n",
+        with_endpoints_hint(endpoints, "pnpctl: health: a service is not serving").c_str());
   return failures == 0 ? 0 : 1;
 }
 

@@ -43,13 +43,16 @@ class Endpoints:
     tls_key: str | None = None
     tls_server_name: str | None = None
     token_file: str | None = None
+    # The endpoints file the addresses came from (discover()), named when a service there
+    # does not answer: the platform that wrote it may have stopped.
+    source: str | None = None
 
     @classmethod
     def from_mapping(cls, values: Mapping[str, str],
                      base: "Endpoints | None" = None) -> "Endpoints":
         """`base` (default: the conventional loopback ports) with the given fields replaced;
         an unknown name raises ValueError naming it."""
-        known = {f.name for f in dataclasses.fields(cls)}
+        known = {f.name for f in dataclasses.fields(cls)} - {"source"}
         unknown = sorted(set(values) - known)
         if unknown:
             raise ValueError(f"endpoints: unknown service or setting {unknown[0]!r}; expected one "
@@ -63,7 +66,10 @@ class Endpoints:
             values = json.load(f)
         if not isinstance(values, dict):
             raise ValueError(f"{path}: expected a JSON object of service addresses")
-        return cls.from_mapping(values, base)
+        try:
+            return dataclasses.replace(cls.from_mapping(values, base), source=path)
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
 
     @classmethod
     def from_env(cls, base: "Endpoints | None" = None) -> "Endpoints":
@@ -82,12 +88,22 @@ class Endpoints:
 
     @classmethod
     def discover(cls, run_dir: str = "runs/platform") -> "Endpoints":
-        """What a script next to a running platform wants: the addresses scripts/run wrote
-        to RUN_DIR/endpoints.json when that file exists, then pnpctl's environment variables,
-        then the conventional ports."""
-        path = os.path.join(run_dir, "endpoints.json")
+        """Where pnpctl would look: pnpctl's environment variables (PNP_SIM_ADDRESS, ...),
+        then the endpoints file PNP_ENDPOINTS names (it must exist), else RUN_DIR/endpoints.json
+        (scripts/run writes it while the platform runs) when it exists, then the conventional
+        ports."""
+        path = os.environ.get("PNP_ENDPOINTS") or os.path.join(run_dir, "endpoints.json")
+        if os.environ.get("PNP_ENDPOINTS") and not os.path.exists(path):
+            raise ValueError(f"PNP_ENDPOINTS: cannot read {path}")
         base = cls.from_file(path) if os.path.exists(path) else None
         return cls.from_env(base)
+
+    def unavailable_hint(self) -> str:
+        """What to say when a service does not answer: where its address came from."""
+        if not self.source:
+            return ""
+        return (f" (the addresses came from {self.source}: if the platform that wrote it has "
+                f"stopped, start it again with scripts/run, or set PNP_*_ADDRESS)")
 
     def training(self, role: str) -> str:
         if role not in TRAINING_ROLES:

@@ -20,11 +20,15 @@ class PlatformError(Exception):
         super().__init__(f"{method} at {address}: {code.name}: {details}")
 
 
-def from_rpc_error(error: grpc.RpcError, method: str, address: str) -> PlatformError:
-    """The PlatformError for a failed call (grpc.RpcError carries code() and details())."""
+def from_rpc_error(error: grpc.RpcError, method: str, address: str,
+                   endpoints=None) -> PlatformError:
+    """The PlatformError for a failed call (grpc.RpcError carries code() and details()); an
+    UNAVAILABLE one names the endpoints file its address came from, if any."""
     code = error.code() if hasattr(error, "code") else grpc.StatusCode.UNKNOWN
-    details = error.details() if hasattr(error, "details") else str(error)
-    return PlatformError(method, address, code, details or "")
+    details = (error.details() if hasattr(error, "details") else str(error)) or ""
+    if code == grpc.StatusCode.UNAVAILABLE and endpoints is not None:
+        details += endpoints.unavailable_hint()
+    return PlatformError(method, address, code, details)
 
 
 class ReplyError(RuntimeError):

@@ -47,7 +47,8 @@ class Run:
                        "metric": records.metric_record(message.metric)
                        if message.HasField("metric") else None}
         except grpc.RpcError as e:
-            raise from_rpc_error(e, "WatchTrainingRun", address) from None
+            raise from_rpc_error(e, "WatchTrainingRun", address,
+                                 self.platform.endpoints) from None
 
     def wait(self) -> dict:
         """Blocks until the run has finished; returns its final record (state "succeeded",
@@ -100,14 +101,15 @@ class Platform:
         try:
             return getattr(stub, method)(request, timeout=self.timeout_s)
         except grpc.RpcError as e:
-            raise from_rpc_error(e, method, address) from None
+            raise from_rpc_error(e, method, address, self.endpoints) from None
 
     def _policy_call(self, method: str, request):
         stub = policy_grpc.PolicyServiceStub(self._channel(self.endpoints.inference))
         try:
             return getattr(stub, method)(request, timeout=self.timeout_s)
         except grpc.RpcError as e:
-            raise from_rpc_error(e, method, self.endpoints.inference) from None
+            raise from_rpc_error(e, method, self.endpoints.inference,
+                                 self.endpoints) from None
 
     def train(self, role: str, robot: str = "fetch", object: str = "block", world: str = "gym",
               seed: int = 0, actuation: str = "default", preset: str | None = None, algorithm: str | None = None,

@@ -64,6 +64,7 @@ class SimClient:
 
     def __init__(self, endpoints: Endpoints, timeout_s: float = 30.0):
         self.address = endpoints.sim
+        self._endpoints = endpoints
         self._channel = endpoints.channel(endpoints.sim)
         self._stub = sim_grpc.SimulationServiceStub(self._channel)
         self._timeout_s = timeout_s
@@ -72,7 +73,7 @@ class SimClient:
         try:
             return getattr(self._stub, method)(request, timeout=self._timeout_s)
         except grpc.RpcError as e:
-            raise from_rpc_error(e, method, self.address) from None
+            raise from_rpc_error(e, method, self.address, self._endpoints) from None
 
     def create_env(self, robot: str, object: str, world: str, seed: int, count: int,
                    idle_timeout_s: float | None = None, actuation: str = "default") -> str:

@@ -160,6 +160,24 @@ def test_endpoints_refuse_unknown_names_and_a_token_without_tls(tmp_path):
                                                       "127.0.0.1:50055")
 
 
+def test_a_stale_endpoints_file_is_named_when_its_platform_does_not_answer(tmp_path, monkeypatch):
+    """The file scripts/run left behind (or PNP_ENDPOINTS names, as pnpctl reads it): a
+    service there that does not answer is reported with the file its address came from."""
+    path = tmp_path / "stale.json"
+    path.write_text(json.dumps({"approach": "127.0.0.1:1", "inference": "127.0.0.1:1"}))
+    monkeypatch.setenv("PNP_ENDPOINTS", str(path))
+    for name in ("PNP_APPROACH_ADDRESS", "PNP_INFERENCE_ADDRESS"):
+        monkeypatch.delenv(name, raising=False)
+    with pnp.Platform(timeout_s=2) as p:
+        with pytest.raises(pnp.PlatformError) as failed:
+            p.serving_status()
+    assert failed.value.code == grpc.StatusCode.UNAVAILABLE
+    assert f"the addresses came from {path}" in str(failed.value)
+    monkeypatch.setenv("PNP_ENDPOINTS", str(tmp_path / "missing.json"))
+    with pytest.raises(ValueError, match="^PNP_ENDPOINTS: cannot read"):
+        pnp.Endpoints.discover()
+
+
 def test_inference_replicas_are_one_target_and_a_killed_one_costs_no_error(
         workdir, store_with_hierarchy):
     """Two inference servers named by one target (as dns:///pnp-inference:50060 names a
