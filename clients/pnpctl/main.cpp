@@ -12,6 +12,7 @@
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
+#include "services/common/client_logging.h"
 #include "store/run_store.h"
 #include "training/preset.h"
 
@@ -82,6 +83,7 @@ void add_train_options(CLI::App& cmd, TrainArgs& a, bool with_role) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pnp::services::quiet_grpc_logs_unless_asked();
   CLI::App app{"Control the pick-and-place training and inference platform", "pnpctl"};
   app.require_subcommand(1);
   Endpoints endpoints;

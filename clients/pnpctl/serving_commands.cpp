@@ -12,6 +12,7 @@
 #include "pnp/sim/v1/sim_service.grpc.pb.h"
 #include "pnp/train/v1/train_service.grpc.pb.h"
 #include "services/common/convert.h"
+#include "services/common/status.h"
 
 namespace pnp::pnpctl {
 
@@ -121,6 +122,7 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
                    double timeout_s, const std::vector<std::string>& optional) {
   Table table({"service", "address", "status"});
   int failures = 0;
+  std::vector<std::string> hints;
   for (const auto& name : services) {
     const std::string& address = endpoints.address_of(name);
     auto stub = grpc::health::v1::Health::NewStub(endpoints.channel(address));
@@ -133,6 +135,8 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
                      status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED
                  ? "UNREACHABLE"
                  : "ERROR: " + status.error_message();
+      const std::string hint = services::transport_hint(status);
+      if (!hint.empty()) hints.push_back(name + ": " + hint);
     } else {
       text = grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
     }
@@ -145,6 +149,7 @@ int health_command(const Endpoints& endpoints, const std::vector<std::string>& s
     table.add({name, address, text});
   }
   table.print(stdout);
+  for (const auto& hint : hints) std::fprintf(stderr, "pnpctl: %s\n", hint.c_str());
   if (failures > 0 && !endpoints.endpoints_file.empty())
     std::fprintf(
         stderr, "%s\n",

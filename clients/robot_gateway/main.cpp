@@ -26,12 +26,14 @@
 #include "common/error.h"
 #include "common/seed_flag.h"
 #include "services/common/address.h"
+#include "services/common/client_logging.h"
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 
 int main(int argc, char** argv) {
   using namespace pnp;
+  services::quiet_grpc_logs_unless_asked();
   services::catch_termination_signals();  // handed to the watcher below
   CLI::App app{"Drive an arm's controller with the served pick-and-place policy",
                "pnp-robot-gateway"};

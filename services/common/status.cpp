@@ -54,11 +54,28 @@ std::string_view status_code_name(grpc::StatusCode code) {
   return kNames[static_cast<std::size_t>(index)];
 }
 
+std::string transport_hint(const grpc::Status& status) {
+  if (status.error_code() != grpc::StatusCode::UNAVAILABLE) return {};
+  const std::string& text = status.error_message();
+  if (text.find("Socket closed") != std::string::npos) {
+    return "the server closed the connection at once: if it serves TLS, dial it with --tls-ca "
+           "(and --tls-cert/--tls-key or --token-file if it authenticates clients)";
+  }
+  if (text.find("Handshake") != std::string::npos || text.find("handshake") != std::string::npos ||
+      text.find("SSL") != std::string::npos) {
+    return "the TLS handshake failed: if the server serves plaintext (loopback), drop --tls-ca; "
+           "otherwise check that --tls-ca signed its certificate and the name dialled is in it "
+           "(--tls-server-name)";
+  }
+  return {};
+}
+
 void throw_if_error(const grpc::Status& status, std::string_view what, std::string_view address) {
   if (status.ok()) return;
+  const std::string hint = transport_hint(status);
   const std::string message = std::string(what) + " (" + std::string(address) +
                               "): " + std::string(status_code_name(status.error_code())) + ": " +
-                              status.error_message();
+                              status.error_message() + (hint.empty() ? "" : "\n(" + hint + ")");
   switch (status.error_code()) {
     case grpc::StatusCode::INVALID_ARGUMENT:
       throw Error(ErrorCode::kInvalidArgument, message);

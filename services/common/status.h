@@ -6,6 +6,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <exception>
+#include <string>
 #include <string_view>
 
 #include "common/error.h"
@@ -19,6 +20,11 @@ std::string_view status_code_name(grpc::StatusCode code);
 // The client's side: a failed call becomes an Error "<what> (<address>): <CODE>: <message>"
 // with the matching core code (a lost or slow server is UNAVAILABLE).
 void throw_if_error(const grpc::Status& status, std::string_view what, std::string_view address);
+
+// What to do about an UNAVAILABLE status gRPC describes in transport terms: a server that
+// closed the connection at once (a plaintext client at a TLS server), or a TLS handshake
+// that failed (a TLS client at a plaintext server, or the wrong CA); empty otherwise.
+std::string transport_hint(const grpc::Status& status);
 
 template <typename Body>
 grpc::Status guarded(Body&& body) {

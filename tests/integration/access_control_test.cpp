@@ -131,6 +131,21 @@ TEST_F(SecuredServers, APlaintextClientFails) {
             grpc::StatusCode::UNAVAILABLE);
 }
 
+// pnpctl without --tls-ca at a TLS server says what to pass, without gRPC's own log lines
+// (it said "UNAVAILABLE ... Socket closed" after an "E1206 ..." line).
+TEST_F(SecuredServers, APlaintextPnpctlIsToldToDialWithTls) {
+  ChildProcess cli(
+      "pnpctl-plaintext",
+      {PNP_BIN_DIR "/pnpctl", "--inference", loopback(inference_->port()), "promote", "1"},
+      dir_.path());
+  const auto status = cli.wait(60s);
+  ASSERT_TRUE(status && status->exited) << cli.stderr_text();
+  EXPECT_EQ(status->code, 1);
+  EXPECT_NE(cli.stderr_text().find("if it serves TLS, dial it with --tls-ca"), std::string::npos)
+      << cli.stderr_text();
+  EXPECT_EQ(cli.stderr_text().find("E1"), std::string::npos) << cli.stderr_text();
+}
+
 TEST_F(SecuredServers, TlsWithoutCredentialsIsUnauthenticatedOnPromoteCheckpoint) {
   const grpc::Status status = promote(tls_channel(inference_->port(), ""));
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED) << status.error_message();

@@ -26,6 +26,9 @@ def from_rpc_error(error: grpc.RpcError, method: str, address: str,
     UNAVAILABLE one names the endpoints file its address came from, if any."""
     code = error.code() if hasattr(error, "code") else grpc.StatusCode.UNKNOWN
     details = (error.details() if hasattr(error, "details") else str(error)) or ""
+    if code == grpc.StatusCode.UNAVAILABLE and "Socket closed" in details:
+        details += (" (the server closed the connection at once: if it serves TLS, give "
+                    "tls_ca, or PNP_TLS_CA)")
     if code == grpc.StatusCode.UNAVAILABLE and endpoints is not None:
         details += endpoints.unavailable_hint()
     return PlatformError(method, address, code, details)
