@@ -17,7 +17,7 @@ body{font-family:sans-serif;margin:1.5em;color:#222}
 table{border-collapse:collapse;margin:.5em 0 1.5em}
 th,td{border-bottom:1px solid #ddd;padding:.25em .6em;text-align:left;font-size:14px}
 th{background:#f3f3f3}
-.state-succeeded{color:#2ca02c}.state-failed{color:#d62728}.state-running{color:#1f77b4}
+.state-reached{color:#2ca02c}.state-not-reached{color:#b8860b}.state-failed{color:#d62728}.state-running{color:#1f77b4}
 .ok{color:#2ca02c}.bad{color:#d62728}
 nav a{margin-right:1em}
 svg{margin:.5em 0}
@@ -69,10 +69,10 @@ std::string overview_page(const std::vector<store::RunRecord>& runs,
                     p.checkpoint_id, when(p.promoted_ms), escape_xml(p.promoted_by));
   body +=
       "</table>\n<h2>Runs</h2>\n<table id=\"runs\"><tr><th>run</th><th>role</th>"
-      "<th>algorithm</th><th>robot / object</th><th>seed</th><th>state</th><th>steps</th>"
+      "<th>algorithm</th><th>robot / object</th><th>seed</th><th>outcome</th><th>steps</th>"
       "<th>success</th><th>target reached at</th><th>created</th></tr>\n";
   for (const auto& r : runs) {
-    const std::string state(store::run_state_name(r.state));
+    const std::string state(store::run_outcome(r.state, r.reached));
     body += fmt::format(
         "<tr class=\"run\" data-run=\"{}\"><td><a href=\"/runs/{}\">{}</a></td><td>{}</td>"
         "<td>{}</td><td>{} / {}</td><td>{}</td><td class=\"state-{}\">{}</td><td>{}</td>"
@@ -94,7 +94,8 @@ std::string run_page(const store::RunRecord& run,
       "id=\"wall\">&#8212;</span> of training</p>\n"
       "<div id=\"curve\" data-points=\"0\">loading the learning curve&#8230;</div>\n",
       run.id, escape_xml(run.spec.role), escape_xml(run.spec.algorithm), escape_xml(run.spec.robot),
-      escape_xml(run.spec.object), run.spec.seed, store::run_state_name(run.state), run.env_steps);
+      escape_xml(run.spec.object), run.spec.seed, store::run_outcome(run.state, run.reached),
+      run.env_steps);
   if (!run.error.empty()) body += fmt::format("<p class=\"bad\">{}</p>\n", escape_xml(run.error));
   body +=
       "<h2>Checkpoints</h2>\n<table id=\"checkpoints\"><tr><th>checkpoint</th><th>steps</th>"
@@ -166,6 +167,7 @@ nlohmann::json run_json(const store::RunRecord& run,
   return {{"run_id", run.id},
           {"role", run.spec.role},
           {"state", store::run_state_name(run.state)},
+          {"outcome", store::run_outcome(run.state, run.reached)},
           {"env_steps", run.env_steps},
           {"last_success", run.last_success},
           {"points", points}};
@@ -203,7 +205,7 @@ function draw(run) {{
   const box = document.getElementById('curve');
   box.innerHTML = svg + '</svg>';
   box.dataset.points = pts.length;
-  document.getElementById('state').textContent = run.state;
+  document.getElementById('state').textContent = run.outcome;
   document.getElementById('steps').textContent = run.env_steps;
   if (pts.length) document.getElementById('wall').textContent = `${{pts[pts.length - 1].wall_s.toFixed(1)}} s`;
 }}

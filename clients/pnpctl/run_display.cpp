@@ -4,6 +4,7 @@
 
 #include "clients/pnpctl/rpc.h"
 #include "clients/pnpctl/table.h"
+#include "store/records.h"
 
 namespace pnp::pnpctl {
 namespace {
@@ -15,8 +16,8 @@ std::string steps_text(long long steps) {
 }  // namespace
 
 std::string outcome_text(const train::v1::TrainingRun& run) {
-  if (run.state() != train::v1::RUN_STATE_SUCCEEDED) return short_name(run.state());
-  return run.reached() ? "reached" : "not-reached";
+  return std::string(
+      store::run_outcome(store::parse_run_state(short_name(run.state())), run.reached()));
 }
 
 std::string score_text(const train::v1::TrainingRun& run) {

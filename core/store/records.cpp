@@ -37,4 +37,9 @@ bool is_terminal(RunState state) {
          state == RunState::kCancelled;
 }
 
+std::string_view run_outcome(RunState state, bool reached) {
+  if (state != RunState::kSucceeded) return run_state_name(state);
+  return reached ? "reached" : "not-reached";
+}
+
 }  // namespace pnp::store

@@ -16,6 +16,10 @@ enum class RunState { kPending, kRunning, kSucceeded, kFailed, kCancelled };
 std::string_view run_state_name(RunState state);
 RunState parse_run_state(std::string_view name, std::string_view field = "state");
 bool is_terminal(RunState state);
+// What every client shows for a run (pnpctl, the dashboard, the Python package): a run that
+// finished normally "reached" its target or is "not-reached" (stopped at its step cap);
+// otherwise its state (pending, running, failed, cancelled).
+std::string_view run_outcome(RunState state, bool reached);
 
 // The roles a run or a checkpoint can have (common/roles.h); anything else is refused.
 using pnp::is_known_role;

@@ -12,6 +12,14 @@ def _seconds(timestamp) -> float | None:
     return timestamp.seconds + timestamp.nanos * 1e-9
 
 
+def _outcome(state: str, reached: bool) -> str:
+    """As pnpctl and the dashboard show a run: a finished one "reached" its target or is
+    "not-reached" (stopped at its step cap); otherwise its state."""
+    if state != "succeeded":
+        return state
+    return "reached" if reached else "not-reached"
+
+
 def run_record(run) -> dict:
     return {
         "run_id": run.run_id,
@@ -23,6 +31,7 @@ def run_record(run) -> dict:
         "actuation": names.to_name(names.ACTUATIONS, run.actuation),
         "seed": run.seed,
         "state": names.to_name(names.RUN_STATES, run.state),
+        "outcome": _outcome(names.to_name(names.RUN_STATES, run.state), run.reached),
         "env_steps": run.env_steps,
         "max_steps": run.max_steps,
         "last_success": run.last_success,

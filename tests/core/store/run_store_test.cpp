@@ -124,5 +124,15 @@ TEST_F(StoreTest, ARolledBackTransactionLeavesNothing) {
   EXPECT_TRUE(store.list_runs().empty());
 }
 
+// One name for a run's outcome in pnpctl, the dashboard and the Python package (pnpctl said
+// "reached" where the dashboard said "succeeded" for the same run).
+TEST(RunOutcome, AFinishedRunSaysWhetherItReachedItsTargetOtherRunsTheirState) {
+  EXPECT_EQ(run_outcome(RunState::kSucceeded, true), "reached");
+  EXPECT_EQ(run_outcome(RunState::kSucceeded, false), "not-reached");
+  EXPECT_EQ(run_outcome(RunState::kRunning, false), "running");
+  EXPECT_EQ(run_outcome(RunState::kFailed, false), "failed");
+  EXPECT_EQ(run_outcome(RunState::kCancelled, true), "cancelled");
+}
+
 }  // namespace
 }  // namespace pnp::store
