@@ -119,6 +119,7 @@ struct PipelineArgs {
   std::uint64_t eval_seed = 424242;  // the held-out episodes' seed (no training run uses it)
   double wait_s = 30;                // for the services to become healthy
   std::string json_out;              // also write the results as JSON here
+  std::string expected;  // compare with the figures checked in here (expected_results.h)
 };
 int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args);
 

@@ -288,6 +288,9 @@ int main(int argc, char** argv) {
   pipeline_cmd->add_option("--wait", pipeline.wait_s, "seconds to wait for the services")
       ->capture_default_str();
   pipeline_cmd->add_option("--json-out", pipeline.json_out, "also write the results as JSON");
+  pipeline_cmd->add_option("--expected", pipeline.expected,
+                           "compare with the figures docs give for this job "
+                           "(docs/results/expected/main_job.json, per GEMM path and commit)");
   pipeline_cmd->callback([&] {
     // The choreographer shares the world, seed, stop rule and output settings.
     TrainArgs& c = pipeline.choreographer;

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "clients/pnpctl/commands.h"
+#include "clients/pnpctl/expected_results.h"
 #include "clients/pnpctl/rpc.h"
 #include "clients/pnpctl/run_display.h"
 #include "clients/pnpctl/run_watch.h"
@@ -190,19 +191,24 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args) {
     std::printf(", choices %s x%d", held_out.sequences.front().first.c_str(),
                 held_out.sequences.front().second);
   std::printf("\n");
+  const train::v1::TrainingRun& last = results.back().run;
+  const nlohmann::json out = {{"world", args.experts.world},
+                              {"actuation", actuation},
+                              {"robot", args.experts.robot},
+                              {"object", args.experts.object},
+                              {"seed", args.experts.seed},
+                              {"gemm_path", last.gemm_path()},
+                              {"code_commit", last.code_commit()},
+                              {"roles", json_roles},
+                              {"total_steps_to_target", total_steps},
+                              {"total_wall_s", total_wall},
+                              {"held_out",
+                               {{"episodes", held_out.episodes},
+                                {"success_rate", held_out.success_rate()},
+                                {"seed", args.eval_seed},
+                                {"sequences", held_out.sequences}}}};
+  if (!args.expected.empty()) std::printf("%s", compare_with_expected(out, args.expected).c_str());
   if (!args.json_out.empty()) {
-    const nlohmann::json out = {{"world", args.experts.world},
-                                {"actuation", actuation},
-                                {"robot", args.experts.robot},
-                                {"object", args.experts.object},
-                                {"roles", json_roles},
-                                {"total_steps_to_target", total_steps},
-                                {"total_wall_s", total_wall},
-                                {"held_out",
-                                 {{"episodes", held_out.episodes},
-                                  {"success_rate", held_out.success_rate()},
-                                  {"seed", args.eval_seed},
-                                  {"sequences", held_out.sequences}}}};
     std::ofstream file(args.json_out);
     file << out.dump(2) << "\n";
     if (!file.flush()) throw Error(ErrorCode::kUnavailable, "could not write " + args.json_out);

@@ -16,6 +16,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -30,6 +31,17 @@
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
+
+namespace {
+
+void write_json_file(const std::string& path, const nlohmann::json& value) {
+  std::ofstream file(path);
+  file << value.dump(2) << "\n";
+  if (!file.flush())
+    throw pnp::Error(pnp::ErrorCode::kUnavailable, "--json-out: could not write " + path);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace pnp;
@@ -63,6 +75,8 @@ int main(int argc, char** argv) {
   app.add_flag("--trace", trace,
                "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
+  std::string json_out;
+  app.add_option("--json-out", json_out, "also write the summary as JSON to this file");
   app.add_flag("--quiet", quiet, "no per-event log lines on stderr (warnings still)");
   app.add_flag("--strict", strict,
                "refuse a served policy trained for another arm (another robot, or the mocap "
@@ -154,6 +168,7 @@ int main(int argc, char** argv) {
       }
     }
     const nlohmann::json summary = gateway::summarize(reports);
+    if (!json_out.empty()) write_json_file(json_out, summary);
     if (json) {
       std::cout << summary.dump() << "\n";
     } else {
