@@ -10,6 +10,7 @@
 #include "common/error.h"
 #include "security/auth_policy.h"
 #include "services/common/address.h"
+#include "services/common/endpoints_file.h"
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
@@ -46,6 +47,8 @@ int main(int argc, char** argv) {
   app.add_option("--inference", inference, "inference service")
       ->envname("PNP_INFERENCE_ADDRESS")
       ->capture_default_str();
+  std::string endpoints_file;
+  services::add_endpoints_file_option(app, endpoints_file);
   // The services' credentials: --platform-tls-ca, --platform-token-file, ... (the
   // episode viewer steps a simulation and asks for actions: an agent's token).
   services::ClientTlsFiles tls;
@@ -70,6 +73,9 @@ int main(int argc, char** argv) {
       std::chrono::milliseconds(static_cast<long long>(deadline_s * 1000));
   try {
     services::validate_address(config.address, "--address");  // before the store is opened
+    const services::FileAddress from_file[] = {{"sim", "--sim", &sim},
+                                               {"inference", "--inference", &inference}};
+    services::apply_endpoints_file(app, endpoints_file, from_file);
     services::validate_address(sim, "--sim");
     services::validate_address(inference, "--inference");
     if (!auth_policy.empty())

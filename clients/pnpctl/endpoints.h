@@ -49,9 +49,6 @@ struct Endpoints {
 inline constexpr const char* kAllServices[] = {"sim", "approach", "manipulate", "retract",
                                                "hlc", "e2e",      "inference"};
 
-// The file scripts/run writes, read when neither --endpoints nor PNP_ENDPOINTS names one.
-inline constexpr const char* kDefaultEndpointsFile = "runs/platform/endpoints.json";
-
 void add_endpoint_options(CLI::App& app, Endpoints& endpoints);
 
 // After parsing: the endpoints file's addresses for every service whose flag and variable

@@ -28,6 +28,7 @@
 #include "common/seed_flag.h"
 #include "services/common/address.h"
 #include "services/common/client_logging.h"
+#include "services/common/endpoints_file.h"
 #include "services/common/replica_channel.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
@@ -64,6 +65,8 @@ int main(int argc, char** argv) {
   app.add_option("--inference", inference_address, "inference service host:port")
       ->envname("PNP_INFERENCE_ADDRESS")
       ->capture_default_str();
+  std::string endpoints_file;
+  services::add_endpoints_file_option(app, endpoints_file);
   app.add_option("--config", config_path, "gateway config (frames, limits, timing)")
       ->capture_default_str();
   app.add_option("--episodes", episodes, "episodes to run")->capture_default_str();
@@ -93,6 +96,10 @@ int main(int argc, char** argv) {
     if (episodes < 1) {
       throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
     }
+    const services::FileAddress from_file[] = {
+        {"robot_controller", "--controller", &controller_address},
+        {"inference", "--inference", &inference_address}};
+    endpoints_file = services::apply_endpoints_file(app, endpoints_file, from_file);
     services::validate_address(controller_address, "--controller");
     services::validate_address(inference_address, "--inference");
     services::validate(tls);
@@ -182,7 +189,10 @@ int main(int argc, char** argv) {
     if (interrupted.load()) return 130;
     return !reports.empty() && gateway::ends_run(reports.back().end) ? 3 : 0;
   } catch (const Error& e) {
-    std::fprintf(stderr, "pnp-robot-gateway: %s\n", e.what());
+    const std::string message = e.code() == ErrorCode::kUnavailable
+                                    ? services::with_endpoints_file_hint(endpoints_file, e.what())
+                                    : std::string(e.what());
+    std::fprintf(stderr, "pnp-robot-gateway: %s\n", message.c_str());
     return e.code() == ErrorCode::kInvalidArgument ? 2 : 1;  // 2: bad usage or input
   }
 }
