@@ -12,6 +12,7 @@
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
+#include "services/common/cli_suggestion.h"
 #include "services/common/client_logging.h"
 #include "store/run_store.h"
 #include "training/preset.h"
@@ -335,7 +336,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    std::fprintf(stderr, "pnpctl: error: %s\n", e.what());
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    std::fprintf(stderr, "pnpctl: error: %s%s\n", e.what(),
+                 pnp::services::suggest_for_unknown(app, args).c_str());
     return 2;
   }
   try {
