@@ -57,13 +57,22 @@ int audit_command(const AuditArgs& args) {
   // "recorded by": the server that forwarded the record, as the store authenticated it
   // ("self": written by the server that answered the call).
   Table table({"time", "service", "principal", "rpc", "code", "recorded by", "peer", "request"});
+  // A request can be 2 KB of JSON: cut in the table (whole with --wide or --json), at a
+  // character boundary.
+  constexpr std::size_t kRequestColumn = 48;
+  const auto shown = [&](const std::string& request) {
+    if (args.wide || request.size() <= kRequestColumn) return request;
+    std::size_t cut = kRequestColumn - 3;
+    while (cut > 0 && (static_cast<unsigned char>(request[cut]) & 0xC0) == 0x80) --cut;
+    return request.substr(0, cut) + "...";
+  };
   for (const store::AuditRecord& r : records) {
     // "/pnp.policy.v1.PolicyService/PromoteCheckpoint" -> "PolicyService/PromoteCheckpoint"
     const auto slash = r.rpc.rfind('/');
     const auto dot = r.rpc.rfind('.', slash);
     const std::string rpc = dot == std::string::npos ? r.rpc : r.rpc.substr(dot + 1);
     table.add({utc_text(r.ts_ms), r.service, r.principal.empty() ? "-" : r.principal, rpc, r.code,
-               r.recorded_by.empty() ? "self" : r.recorded_by, r.peer, r.request});
+               r.recorded_by.empty() ? "self" : r.recorded_by, r.peer, shown(r.request)});
   }
   table.print(stdout);
   return 0;

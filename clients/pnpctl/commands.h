@@ -78,6 +78,7 @@ struct AuditArgs {
   std::string since;  // empty: from the start
   int limit = 1000;
   bool json = false;  // one JSON object per line
+  bool wide = false;  // the whole request in the table
 };
 int audit_command(const AuditArgs& args);
 // Several ids are promoted together, in one transaction (at most one per role).

@@ -180,6 +180,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   audit_cmd->add_flag("--json", audit.json, "one JSON object per line");
+  audit_cmd->add_flag("--wide", audit.wide,
+                      "whole requests in the table (else cut at 48 characters)");
   audit_cmd->callback([&] { command = [&] { return audit_command(audit); }; });
 
   std::vector<std::int64_t> plot_runs;
