@@ -181,7 +181,7 @@ const series = [['task_success', '#1f77b4', 'task success', ''],
                 ['subtask_success', '#ff7f0e', 'subtask success', ''],
                 ['stop_score', '#2ca02c', 'stop score', '5 4']];
 function draw(run) {{
-  const W = 640, H = 320, L = 50, R = 20, T = 20, B = 40;
+  const W = 640, H = 320, L = 50, R = 20, T = 36, B = 40;  // the legend above the plot
   const pts = run.points;
   const maxX = Math.max(1, ...pts.map(p => p.env_steps));
   const x = v => L + (W - L - R) * v / maxX, y = v => T + (H - T - B) * (1 - v);
@@ -200,7 +200,7 @@ function draw(run) {{
     const line = own.map(p => `${{x(p.env_steps).toFixed(1)}},${{y(p[key]).toFixed(1)}}`).join(' ');
     svg += `<polyline class="series ${{key}}" data-points="${{own.length}}" points="${{line}}" fill="none" stroke="${{colour}}" stroke-width="2" stroke-dasharray="${{dash}}"/>`;
     for (const p of own) svg += `<circle cx="${{x(p.env_steps).toFixed(1)}}" cy="${{y(p[key]).toFixed(1)}}" r="2.5" fill="${{colour}}"/>`;
-    svg += `<text x="${{L + 10 + 150 * i}}" y="${{T + 14}}" font-size="11" fill="${{colour}}">${{label}}</text>`;
+    svg += `<text class="legend" x="${{L + 10 + 150 * i}}" y="16" font-size="11" fill="${{colour}}">${{label}}</text>`;
   }});
   const box = document.getElementById('curve');
   box.innerHTML = svg + '</svg>';

@@ -11,7 +11,8 @@ namespace pnp::plot {
 namespace {
 
 constexpr double kPanel = 280;  // each view's drawing area, square, in px
-constexpr double kMargin = 30;  // around each view (axis labels)
+constexpr double kMargin = 40;  // around each view (tick numbers and axis labels)
+constexpr double kBelow = 32;   // under each view: tick numbers, then the axis label
 constexpr double kTitle = 28;   // the title's band
 constexpr double kLegend = 24;  // the legend's band
 constexpr double kPadding_m = 0.04;
@@ -43,6 +44,36 @@ ViewBox fit(const EpisodeTrace& t, std::size_t u, std::size_t v, double left, do
   return {(lo_u + hi_u) / 2 - span / 2, (lo_v + hi_v) / 2 - span / 2, scale, left, top};
 }
 
+// A round step giving at most six ticks over `span` metres.
+double tick_step(double span) {
+  for (const double step : {0.01, 0.02, 0.05, 0.1, 0.2, 0.5})
+    if (span / step <= 6) return step;
+  return 1.0;
+}
+
+// Numbers along both axes of a view (metres, in the world frame): without them a reader
+// could not tell a 2 cm miss from a 20 cm one.
+void draw_ticks(std::string& out, const ViewBox& box) {
+  const double span = kPanel / box.scale;
+  const double step = tick_step(span);
+  const int decimals = step >= 0.1 ? 1 : 2;
+  const auto label = [&](double value) { return fmt::format("{:.{}f}", value, decimals); };
+  for (auto k = static_cast<long>(std::ceil(box.u0 / step));
+       k <= static_cast<long>(std::floor((box.u0 + span) / step)); ++k) {
+    const double u = static_cast<double>(k) * step;
+    out += fmt::format(
+        R"svg(<text class="tick" x="{:.1f}" y="{:.1f}" font-size="9" text-anchor="middle">{}</text>)svg",
+        box.x(u), box.top + kPanel + 11, label(u));
+  }
+  for (auto k = static_cast<long>(std::ceil(box.v0 / step));
+       k <= static_cast<long>(std::floor((box.v0 + span) / step)); ++k) {
+    const double v = static_cast<double>(k) * step;
+    out += fmt::format(
+        R"svg(<text class="tick" x="{:.1f}" y="{:.1f}" font-size="9" text-anchor="end">{}</text>)svg",
+        box.left - 3, box.y(v) + 3, label(v));
+  }
+}
+
 void draw_view(std::string& out, const EpisodeTrace& t, std::size_t u, std::size_t v, double left,
                const char* name, const char* u_label, const char* v_label) {
   const ViewBox box = fit(t, u, v, left, kTitle);
@@ -50,12 +81,13 @@ void draw_view(std::string& out, const EpisodeTrace& t, std::size_t u, std::size
   out += fmt::format(
       R"svg(<rect x="{:.1f}" y="{:.1f}" width="{:.1f}" height="{:.1f}" fill="#fafafa" stroke="#999"/>)svg",
       left, kTitle, kPanel, kPanel);
+  draw_ticks(out, box);
   out += fmt::format(
       R"svg(<text x="{:.1f}" y="{:.1f}" font-size="11" text-anchor="middle">{} (m)</text>)svg",
-      left + kPanel / 2, kTitle + kPanel + 14, u_label);
+      left + kPanel / 2, kTitle + kPanel + 26, u_label);
   out += fmt::format(
       R"svg(<text x="{:.1f}" y="{:.1f}" font-size="11" text-anchor="middle" transform="rotate(-90 {:.1f} {:.1f})">{} (m)</text>)svg",
-      left - 8, kTitle + kPanel / 2, left - 8, kTitle + kPanel / 2, v_label);
+      left - 30, kTitle + kPanel / 2, left - 30, kTitle + kPanel / 2, v_label);
   if (v == 2 && t.table_top_z) {
     out += fmt::format(
         R"svg(<line class="table" x1="{:.1f}" y1="{:.1f}" x2="{:.1f}" y2="{:.1f}" stroke="#8c564b" stroke-width="2"/>)svg",
@@ -123,7 +155,7 @@ std::string subtask_colour(int subtask) {
 
 std::string episode_view_svg(const EpisodeTrace& t) {
   const double width = 2 * (kPanel + 2 * kMargin);
-  const double height = kTitle + kPanel + 20 + kLegend;
+  const double height = kTitle + kPanel + kBelow + kLegend;
   std::string out = fmt::format(
       R"svg(<svg xmlns="http://www.w3.org/2000/svg" class="episode" data-steps="{}" data-success="{}" width="{:.0f}" height="{:.0f}" viewBox="0 0 {:.0f} {:.0f}" font-family="sans-serif">)svg",
       t.frames.empty() ? 0 : t.frames.size() - 1, t.success ? 1 : 0, width, height, width, height);
@@ -134,7 +166,7 @@ std::string episode_view_svg(const EpisodeTrace& t) {
   draw_view(out, t, 0, 1, kMargin, "top", "x", "y");
   draw_view(out, t, 0, 2, kPanel + 3 * kMargin, "side", "x", "z");
   double x = kMargin;
-  const double y = kTitle + kPanel + 20 + 14;
+  const double y = kTitle + kPanel + kBelow + 14;
   for (int s = 0; s < 3; ++s) {
     out += fmt::format(
         R"svg(<line x1="{:.1f}" y1="{:.1f}" x2="{:.1f}" y2="{:.1f}" stroke="{}" stroke-width="3"/><text x="{:.1f}" y="{:.1f}" font-size="11">{}</text>)svg",

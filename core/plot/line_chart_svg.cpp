@@ -37,8 +37,26 @@ std::string tick_label(double value, bool in_thousands) {
   return fmt::format("{:g}k", value / 1000);
 }
 
+namespace {
+
+// Each label once, in the order the series come.
+std::vector<const Series*> legend_entries(const std::vector<Series>& series) {
+  std::vector<const Series*> entries;
+  std::set<std::string> listed;
+  for (const auto& s : series)
+    if (listed.insert(s.label).second) entries.push_back(&s);
+  return entries;
+}
+
+}  // namespace
+
 std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& series) {
-  constexpr double W = 900, H = 420, L = 70, R = 20, B = 50;
+  // The legend has a column of its own right of the plot: inside it, it sat on the curves,
+  // which end near success 1 at the top right.
+  const std::vector<const Series*> entries = legend_entries(series);
+  constexpr double kPlotW = 900, H = 420, L = 70, B = 50, kLegendW = 270;
+  const double W = kPlotW + (entries.empty() ? 0 : kLegendW);
+  const double R = W - kPlotW + 20;
   const double T = spec.title.empty() ? 30 : 45;
   double data_max = 0;
   for (const auto& s : series)
@@ -60,8 +78,8 @@ std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& ser
       W, H, L, H - B, W - R, H - B, L, T, L, H - B, (L + W - R) / 2, H - 12,
       escape_xml(spec.x_label), (T + H - B) / 2, (T + H - B) / 2, escape_xml(spec.y_label));
   if (!spec.title.empty()) {
-    svg += fmt::format("<text x='{}' y='22' text-anchor='middle' font-size='15'>{}</text>\n", W / 2,
-                       escape_xml(spec.title));
+    svg += fmt::format("<text x='{}' y='22' text-anchor='middle' font-size='15'>{}</text>\n",
+                       kPlotW / 2, escape_xml(spec.title));
   }
   for (double g : spec.y_grid) {
     svg += fmt::format(
@@ -85,23 +103,13 @@ std::string line_chart_svg(const ChartSpec& spec, const std::vector<Series>& ser
       svg += fmt::format("<circle cx='{:.1f}' cy='{:.1f}' r='2.5' fill='{}'/>\n", px(x), py(y),
                          s.colour);
   }
-  // The legend, on a translucent box so curves under it stay visible.
-  std::vector<const Series*> entries;
-  std::set<std::string> listed;
-  for (const auto& s : series)
-    if (listed.insert(s.label).second) entries.push_back(&s);
-  if (!entries.empty()) {
-    svg += fmt::format(
-        "<rect x='{}' y='{}' width='{}' height='{}' fill='white' fill-opacity='0.8' "
-        "stroke='#ccc'/>\n",
-        W - 268, T, 262, 18 * entries.size() + 6);
-  }
+  const double lx = W - kLegendW + 10;
   double ly = T + 12;
   for (const Series* s : entries) {
     svg += fmt::format(
-        "<line x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/><text x='{}' "
-        "y='{}'>{}</text>\n",
-        W - 260, ly, W - 235, ly, s->colour, W - 228, ly + 4, escape_xml(s->label));
+        "<line class='legend' x1='{}' y1='{}' x2='{}' y2='{}' stroke='{}' stroke-width='3'/>"
+        "<text x='{}' y='{}'>{}</text>\n",
+        lx, ly, lx + 25, ly, s->colour, lx + 32, ly + 4, escape_xml(s->label));
     ly += 18;
   }
   return svg + "</svg>\n";

@@ -50,6 +50,14 @@ TEST(EpisodeViewSvg, DrawsBothViewsWithOneSegmentPerStepInItsSubtasksColour) {
   EXPECT_EQ(svg.find("<seed"), std::string::npos);
 }
 
+// Both axes of both views carry numbers in metres, round steps, in the world frame.
+TEST(EpisodeViewSvg, BothAxesOfEachViewCarryNumbers) {
+  const std::string svg = episode_view_svg(three_steps());
+  EXPECT_GE(count(svg, R"(class="tick")"), 4 * 3) << "at least three numbers per axis";
+  EXPECT_LE(count(svg, R"(class="tick")"), 4 * 7) << "at most seven per axis";
+  EXPECT_NE(svg.find(R"(text-anchor="end">)"), std::string::npos) << "the vertical axes'";
+}
+
 TEST(EpisodeViewSvg, AFailedOrEmptyEpisodeStillDraws) {
   EpisodeTrace t = three_steps();
   t.success = false;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <regex>
 #include <string>
 
 namespace pnp::plot {
@@ -21,7 +22,8 @@ TEST(AxisTicks, AreOneTwoOrFiveTimesAPowerOfTenAndCoverTheData) {
   EXPECT_EQ(axis_ticks(17400), (std::vector<double>{0, 5000, 10000, 15000, 20000}));
   const std::vector<double> fractions = axis_ticks(1);
   ASSERT_EQ(fractions.size(), 6u);
-  for (std::size_t k = 0; k < fractions.size(); ++k) EXPECT_DOUBLE_EQ(fractions[k], 0.2 * static_cast<double>(k));
+  for (std::size_t k = 0; k < fractions.size(); ++k)
+    EXPECT_DOUBLE_EQ(fractions[k], 0.2 * static_cast<double>(k));
 }
 
 TEST(AxisTicks, NoDataStillGivesAnAxis) {
@@ -54,6 +56,17 @@ TEST(LineChartSvg, MarksEachEvaluationAndListsEachLabelOnce) {
   ChartSpec plain;
   plain.markers = false;
   EXPECT_EQ(count(line_chart_svg(plain, series), "<circle"), 0);
+}
+
+// The legend has its own column right of the plot (inside, it sat on the curves, which end
+// near 1 at the top right).
+TEST(LineChartSvg, TheLegendLiesRightOfThePlotNotOnTheCurves) {
+  const std::vector<Series> series{{"run 1", "#1f77b4", {{1000, 0.9}, {2000, 1.0}}}};
+  const std::string svg = line_chart_svg({}, series);
+  std::smatch axis, legend;
+  ASSERT_TRUE(std::regex_search(svg, axis, std::regex("<line x1='70' y1='370' x2='([0-9.]+)'")));
+  ASSERT_TRUE(std::regex_search(svg, legend, std::regex("class='legend' x1='([0-9.]+)'")));
+  EXPECT_GT(std::stod(legend[1]), std::stod(axis[1]));
 }
 
 }  // namespace
