@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -143,7 +144,9 @@ TEST(GatewayMetrics, AScrapeMidRunShowsTheFinishedEpisodes) {
   ASSERT_GT(cell.inference.port(), 0) << cell.inference.diagnostics();
   ASSERT_GT(cell.controller.port(), 0) << cell.controller.diagnostics();
   std::optional<ChildProcess> gateway;
-  cell.start_gateway(dir, 3, gateway, {"--metrics-address", "127.0.0.1:0"});
+  const std::string summary_file = dir.file("gateway.json");
+  cell.start_gateway(dir, 3, gateway,
+                     {"--metrics-address", "127.0.0.1:0", "--json-out", summary_file});
   ASSERT_TRUE(wait_for_episode_start(*gateway, 2, 60s)) << gateway->diagnostics();
   const int port = metrics_port(*gateway);
   ASSERT_GT(port, 0) << gateway->diagnostics();
@@ -153,6 +156,10 @@ TEST(GatewayMetrics, AScrapeMidRunShowsTheFinishedEpisodes) {
   EXPECT_NE(exposition.find("pnp_gateway_missed_periods_total"), std::string::npos);
   const auto status = gateway->wait(120s);
   ASSERT_TRUE(status && status->ok()) << gateway->diagnostics();
+  // --json-out: the summary --json prints, in a file (scripts/run's gateway.json).
+  std::ifstream file(summary_file);
+  ASSERT_TRUE(file) << summary_file;
+  EXPECT_EQ(nlohmann::json::parse(file), nlohmann::json::parse(gateway->stdout_text()));
 }
 
 TEST(InferenceFault, AKilledInferenceServiceCostsTheEpisodeAndARestartedOneServesTheNext) {
