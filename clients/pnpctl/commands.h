@@ -127,6 +127,14 @@ int pipeline_command(const Endpoints& endpoints, const PipelineArgs& args);
 // The arm's controller (--robot-controller): its state, an emergency stop, and clearing a
 // stop. An emergency stop is cleared only by repeating its reason (robot status shows it)
 // and naming the operator.
+// The simulation-to-base transform from touched points (calibrate_command.cpp).
+struct CalibrateArgs {
+  std::string pairs;  // JSON: {"pairs": [{"sim_m": [...], "base_m": [...]}, ...]}
+  std::string config = "deploy/robot/gateway.json";  // copied with the new base_from_sim
+  std::string out;                                   // empty: print only
+  double max_residual_mm = 5;
+};
+int calibrate_command(const CalibrateArgs& args);
 int robot_status_command(const Endpoints& endpoints, bool json);
 int robot_stop_command(const Endpoints& endpoints, const std::string& reason);
 int robot_resume_command(const Endpoints& endpoints, const std::string& acknowledged_reason,

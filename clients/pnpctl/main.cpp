@@ -318,6 +318,23 @@ int main(int argc, char** argv) {
   robot_status->add_flag("--json", robot_json, "one JSON object");
   robot_status->callback(
       [&] { command = [&] { return robot_status_command(endpoints, robot_json); }; });
+  CalibrateArgs calibrate;
+  auto* robot_calibrate = robot_cmd->add_subcommand(
+      "calibrate", "the simulation-to-base transform from >= 3 touched table points");
+  robot_calibrate
+      ->add_option("--pairs", calibrate.pairs,
+                   "JSON: {\"pairs\": [{\"sim_m\": [x,y,z], \"base_m\": [x,y,z]}]}")
+      ->required();
+  robot_calibrate->add_option("--config", calibrate.config, "the gateway config to copy")
+      ->capture_default_str();
+  robot_calibrate->add_option("--out", calibrate.out,
+                              "write the config with this calibration here (else print only)");
+  robot_calibrate
+      ->add_option("--max-residual-mm", calibrate.max_residual_mm,
+                   "refuse to write when a point is further off the fit")
+      ->check(CLI::Range(0.1, 100.0))
+      ->capture_default_str();
+  robot_calibrate->callback([&] { command = [&] { return calibrate_command(calibrate); }; });
   std::string stop_reason;
   auto* robot_stop = robot_cmd->add_subcommand("stop", "emergency-stop the arm (no lease needed)");
   robot_stop->add_option("--reason", stop_reason, "why (what clearing it acknowledges)")
