@@ -5,26 +5,16 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "clients/pnpctl/commands.h"
 #include "clients/pnpctl/table.h"
 #include "common/error.h"
 #include "geometry/point_fit.h"
 #include "robot/gateway_config.h"
+#include "robot/json_fields.h"
 
 namespace pnp::pnpctl {
 namespace {
-
-nlohmann::json read_json(const std::string& path, std::string_view flag) {
-  std::ifstream in(path);
-  if (!in) throw Error(ErrorCode::kNotFound, std::string(flag) + ": cannot read " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
-  if (doc.is_discarded()) throw_invalid_argument(flag, "a JSON file", path + " is not JSON");
-  return doc;
-}
 
 Eigen::Vector3d point(const nlohmann::json& pair, const char* key, const std::string& field) {
   const std::string where = field + "." + key;
@@ -41,7 +31,7 @@ Eigen::Vector3d point(const nlohmann::json& pair, const char* key, const std::st
 
 // {"pairs": [{"sim_m": [x, y, z], "base_m": [x, y, z]}, ...]}
 std::vector<geometry::PointPair> read_pairs(const std::string& path) {
-  const nlohmann::json doc = read_json(path, "--pairs");
+  const nlohmann::json doc = robot::json_fields::read_file(path, "touched points (--pairs)");
   if (!doc.is_object() || !doc.contains("pairs") || !doc.at("pairs").is_array())
     throw_invalid_argument("--pairs", "{\"pairs\": [{\"sim_m\": [...], \"base_m\": [...]}, ...]}",
                            path);
@@ -81,7 +71,7 @@ int calibrate_command(const CalibrateArgs& args) {
                     " mm off the fit, over --max-residual-mm " + fixed(args.max_residual_mm, 1) +
                     ": touch it again (or check the pair); nothing written");
   }
-  nlohmann::json config = read_json(args.config, "--config");
+  nlohmann::json config = robot::json_fields::read_file(args.config, "gateway config (--config)");
   config["base_from_sim"] = fit.parent_from_child.to_json();
   robot::GatewayConfig::from_json(config);  // the whole file still loads
   std::ofstream out(args.out);

@@ -91,17 +91,19 @@ def inference_server(workdir, store_with_hierarchy):
     server.stop()
 
 
-@pytest.fixture(scope="session")
-def retract_server(workdir, store_with_hierarchy):
-    server = Server("retract", ["pnp-train-server", "--role", "retract", "--db",
-                                str(store_with_hierarchy), "--threads", "1"], workdir)
+def _training_server(role, workdir, store):
+    """A training server of `role` on the shared store, one trainer thread."""
+    server = Server(role, ["pnp-train-server", "--role", role, "--db", str(store),
+                           "--threads", "1"], workdir)
     yield server
     server.stop()
+
+
+@pytest.fixture(scope="session")
+def retract_server(workdir, store_with_hierarchy):
+    yield from _training_server("retract", workdir, store_with_hierarchy)
 
 
 @pytest.fixture(scope="session")
 def approach_server(workdir, store_with_hierarchy):
-    server = Server("approach", ["pnp-train-server", "--role", "approach", "--db",
-                                 str(store_with_hierarchy), "--threads", "1"], workdir)
-    yield server
-    server.stop()
+    yield from _training_server("approach", workdir, store_with_hierarchy)
