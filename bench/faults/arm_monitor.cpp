@@ -23,7 +23,7 @@ void ArmMonitor::watch(const std::stop_token& stop) {
   std::uint64_t last_sequence = 0;
   auto next = Clock::now();
   while (!stop.stop_requested()) {
-    const arm_sim::ControllerReport report = arm_.state();
+    const robot::ControllerReport report = arm_.state();
     Sample sample{Clock::now(), report.arm.mode, report.sequence, report.arm.target_base.position_m,
                   report.arm.tcp_base.position_m.z()};
     {

@@ -1,6 +1,6 @@
 #include "arm_sim/arm_actuated_env.h"
 
-#include "arm_sim/controller_intake.h"
+#include "robot/controller_intake.h"
 #include "robot/target_planner.h"
 #include "sim/actuation.h"
 #include "sim/step_rules.h"
@@ -9,7 +9,9 @@ namespace pnp::arm_sim {
 
 ArmActuatedEnv::ArmActuatedEnv(std::shared_ptr<const sim::WorldModel> world,
                                const ArmWorldOptions& options)
-    : arm_(std::move(world), options.arm), limits_(options.limits) {
+    : arm_(std::move(world), options.arm),
+      limits_(options.limits),
+      backend_(arm_, ClockMode::kRealTime) {
   limits_.validate();
   // The gateway as deployed on this arm: its default timing and scale, the given limits,
   // and the simulation-to-base transform read from the model (what calibration measures).
@@ -57,8 +59,9 @@ void ArmActuatedEnv::drive(const sim::Action& action) {
       planned.verdict.ok() ? std::optional<robot::PoseTarget>(planned.base)
                            : robot::hold_target(gateway_, last_accepted_, s.commanded_base);
   if (!target) return;  // nothing is sent: the controller holds
-  const IntakeOutcome taken = take_into_arm(
-      arm_, limits_,
+  // The stepping is this world's own (step()): the backend only takes the target.
+  const robot::IntakeOutcome taken = robot::take_into_arm(
+      backend_, limits_,
       {target->pose.position_m, target->pose.orientation, target->gripper_width_m, 0});
   if (taken.accepted()) last_accepted_ = target;
 }

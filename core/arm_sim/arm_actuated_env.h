@@ -23,9 +23,10 @@
 #include <optional>
 #include <span>
 
-#include "arm_sim/controller_limits.h"
 #include "arm_sim/simulated_arm.h"
+#include "arm_sim/simulated_arm_backend.h"
 #include "common/rng.h"
+#include "robot/controller_limits.h"
 #include "robot/gateway_config.h"
 #include "robot/perceived_observation.h"
 #include "robot/safety_limits.h"
@@ -35,9 +36,9 @@
 namespace pnp::arm_sim {
 
 struct ArmWorldOptions {
-  ArmControllerOptions arm;     // the simulated Panda: the controller's defaults
-  ControllerLimits limits;      // the controller's own limits: deploy/robot/controller.json's
-  robot::SafetyLimits gateway;  // the gateway's checks: deploy/robot/gateway.json's
+  ArmControllerOptions arm;        // the simulated Panda: the controller's defaults
+  robot::ControllerLimits limits;  // the controller's own limits: deploy/robot/controller.json's
+  robot::SafetyLimits gateway;     // the gateway's checks: deploy/robot/gateway.json's
 };
 
 class ArmActuatedEnv final : public sim::Environment {
@@ -67,7 +68,8 @@ class ArmActuatedEnv final : public sim::Environment {
   void perceive();
 
   SimulatedArm arm_;
-  ControllerLimits limits_;
+  robot::ControllerLimits limits_;
+  SimulatedArmBackend backend_;  // arm_ as the controller takes targets into it
   robot::GatewayConfig gateway_;
   robot::PerceivedObservation perceived_;
   Rng rng_;

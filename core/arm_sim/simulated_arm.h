@@ -29,6 +29,7 @@
 #include "common/rng.h"
 #include "geometry/pose.h"
 #include "geometry/rigid_transform.h"
+#include "robot/arm_backend.h"
 #include "sim/environment.h"
 #include "sim/mujoco_data.h"
 #include "sim/object_shape.h"
@@ -38,10 +39,10 @@
 
 namespace pnp::arm_sim {
 
-// | |q| - 1 | allowed for a target's orientation; beyond it the target is invalid.
-inline constexpr double kUnitQuaternionTolerance = 1e-3;
+using robot::kUnitQuaternionTolerance;
 
 inline constexpr int kJoints = sim::kArmJoints;
+static_assert(kJoints == robot::kArmJointCount);
 inline constexpr double kControlPeriod_s = 0.001;  // the controller's 1 kHz tick
 using JointVector = std::array<double, kJoints>;
 
@@ -115,13 +116,8 @@ struct ArmControllerOptions {
 
 using geometry::Pose;
 
-enum class ArmMode {
-  kIdle,      // after reset(): holding the home posture, no target yet
-  kTracking,  // interpolating towards the latest target
-  kHolding,   // the latest target's segment has ended: holding it
-  kStopped,   // stop(): decelerating within the limits, then holding; targets refused
-  kFault,     // the physics failed (fault() says how): only reset() recovers
-};
+// What the arm is doing: robot::ArmMode, as every controller's arm reports it.
+using robot::ArmMode;
 
 enum class TargetCode { kAccepted, kInvalid, kUnreachable, kJointLimit, kStopped };
 

@@ -5,8 +5,8 @@
 
 namespace pnp::services {
 
-robot::v1::ControllerStatus to_proto(arm_sim::ControllerStatus status) {
-  using S = arm_sim::ControllerStatus;
+robot::v1::ControllerStatus to_proto(robot::ControllerStatus status) {
+  using S = robot::ControllerStatus;
   switch (status) {
     case S::kOk:
       return robot::v1::CONTROLLER_STATUS_OK;
@@ -28,33 +28,33 @@ robot::v1::ControllerStatus to_proto(arm_sim::ControllerStatus status) {
   throw_internal("unknown controller status");
 }
 
-robot::v1::StopKind to_proto(arm_sim::StopKind kind) {
+robot::v1::StopKind to_proto(robot::StopKind kind) {
   switch (kind) {
-    case arm_sim::StopKind::kNone:
+    case robot::StopKind::kNone:
       return robot::v1::STOP_KIND_UNSPECIFIED;
-    case arm_sim::StopKind::kProtective:
+    case robot::StopKind::kProtective:
       return robot::v1::STOP_KIND_PROTECTIVE;
-    case arm_sim::StopKind::kEmergency:
+    case robot::StopKind::kEmergency:
       return robot::v1::STOP_KIND_EMERGENCY;
   }
   throw_internal("unknown stop kind");
 }
 
-arm_sim::StopKind stop_kind_from_proto(robot::v1::StopKind kind) {
+robot::StopKind stop_kind_from_proto(robot::v1::StopKind kind) {
   switch (kind) {
     case robot::v1::STOP_KIND_PROTECTIVE:
-      return arm_sim::StopKind::kProtective;
+      return robot::StopKind::kProtective;
     case robot::v1::STOP_KIND_UNSPECIFIED:  // a stop that does not say is the safe kind
     case robot::v1::STOP_KIND_EMERGENCY:
-      return arm_sim::StopKind::kEmergency;
+      return robot::StopKind::kEmergency;
     default:
       throw_invalid_argument("kind", "STOP_KIND_EMERGENCY or STOP_KIND_PROTECTIVE",
                              std::to_string(static_cast<int>(kind)));
   }
 }
 
-robot::v1::ControllerMode to_proto(arm_sim::ArmMode mode) {
-  using M = arm_sim::ArmMode;
+robot::v1::ControllerMode to_proto(robot::ArmMode mode) {
+  using M = robot::ArmMode;
   switch (mode) {
     case M::kIdle:
       return robot::v1::CONTROLLER_MODE_IDLE;
@@ -70,7 +70,7 @@ robot::v1::ControllerMode to_proto(arm_sim::ArmMode mode) {
   throw_internal("unknown arm mode");
 }
 
-void to_proto(const arm_sim::ControllerReport& report, const std::string& frame_id,
+void to_proto(const robot::ControllerReport& report, const std::string& frame_id,
               robot::v1::ControllerFeedback& out) {
   const auto now = std::chrono::system_clock::now();
   out.set_sequence(report.sequence);
@@ -79,14 +79,18 @@ void to_proto(const arm_sim::ControllerReport& report, const std::string& frame_
   to_proto(report.arm.tcp_base, *out.mutable_measured());
   to_proto(report.arm.commanded_base, *out.mutable_commanded());
   out.set_gripper_width_m(report.arm.finger_gap_m);
-  to_proto(report.arm.object_base, *out.mutable_object()->mutable_pose());
-  to_proto(now, *out.mutable_object()->mutable_stamp());
+  if (report.arm.object_base) {
+    to_proto(*report.arm.object_base, *out.mutable_object()->mutable_pose());
+    to_proto(now, *out.mutable_object()->mutable_stamp());
+  } else {
+    out.clear_object();
+  }
   out.set_mode(to_proto(report.arm.mode));
   out.set_status(to_proto(report.status));
   out.clear_errors();
   for (const auto& e : report.errors) out.add_errors(e);
   out.clear_joint_positions_rad();
-  for (double q : report.arm.joint_positions) out.add_joint_positions_rad(q);
+  for (double q : report.arm.joint_positions_rad) out.add_joint_positions_rad(q);
 }
 
 }  // namespace pnp::services

@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
                                         : pnp::arm_sim::ClockMode::kRealTime;
     options.arm.acceleration_limits_rad_per_s2 =
         pnp::arm_sim::arm_accelerations(acceleration_scale, "--acceleration-scale");
-    if (!limits.empty()) options.limits = pnp::arm_sim::ControllerLimits::load(limits);
+    if (!limits.empty()) options.limits = pnp::robot::ControllerLimits::load(limits);
     pnp::arm_sim::ControllerStandIn arm(options);
     StreamLimits stream_limits(stream_limit_options(limit_options, idle_timeout_s), "robot_sim");
     RobotControllerServiceImpl controller(arm, &stream_limits);

@@ -13,9 +13,9 @@
 namespace pnp::services {
 namespace {
 
-arm_sim::TargetRequest from_proto(const robot::v1::PoseTarget& target) {
+robot::TargetRequest from_proto(const robot::v1::PoseTarget& target) {
   const geometry::Pose pose = services::from_proto(target.pose());
-  arm_sim::TargetRequest request{
+  robot::TargetRequest request{
       target.sequence(),        target.frame_id(),          pose.position_m, pose.orientation,
       target.gripper_width_m(), target.max_speed_m_per_s(), std::nullopt};
   if (target.has_stamp()) {
@@ -111,10 +111,10 @@ grpc::Status RobotControllerServiceImpl::GetState(grpc::ServerContext*,
                                                   const robot::v1::GetStateRequest*,
                                                   robot::v1::GetStateResponse* response) {
   return guarded([&] {
-    const arm_sim::ControllerReport state = arm_.state();
+    const robot::ControllerReport state = arm_.state();
     to_proto(state, arm_.base_frame_id(), *response->mutable_state());
     response->set_lease_holder(arm_.lease_holder().value_or(""));
-    response->set_lockstep(arm_.clock() == arm_sim::ClockMode::kLockstep);
+    response->set_lockstep(arm_.lockstep());
     response->set_stop_kind(to_proto(state.stop_kind));
     response->set_stop_reason(state.stop_reason);
     response->set_tcp_from_flange_m(arm_.tcp_from_flange_m());
@@ -126,12 +126,12 @@ grpc::Status RobotControllerServiceImpl::Stop(grpc::ServerContext*,
                                               const robot::v1::StopRequest* request,
                                               robot::v1::StopResponse* response) {
   return guarded([&] {
-    const arm_sim::StopKind kind = stop_kind_from_proto(request->kind());
-    const arm_sim::ControllerReport state = arm_.stop(request->reason(), kind);
+    const robot::StopKind kind = stop_kind_from_proto(request->kind());
+    const robot::ControllerReport state = arm_.stop(request->reason(), kind);
     log_event("robot_sim", "stop",
-              {{"kind", arm_sim::stop_kind_name(kind)},
+              {{"kind", robot::stop_kind_name(kind)},
                {"reason", request->reason()},
-               {"in_force", arm_sim::stop_kind_name(state.stop_kind)}});
+               {"in_force", robot::stop_kind_name(state.stop_kind)}});
     to_proto(state, arm_.base_frame_id(), *response->mutable_state());
     return grpc::Status::OK;
   });
@@ -148,11 +148,11 @@ grpc::Status RobotControllerServiceImpl::Resume(grpc::ServerContext* context,
     const std::string by = clearing_operator(principal_of(*context), request->operator_name());
     const auto cleared = arm_.resume({request->lease_id(), request->acknowledged_reason(), by});
     log_event("robot_sim", "stop_cleared",
-              {{"kind", arm_sim::stop_kind_name(cleared.kind)},
+              {{"kind", robot::stop_kind_name(cleared.kind)},
                {"reason", cleared.reason},
                {"operator", by},
                {"operator_name_stated", request->operator_name()},
-               {"by_lease_holder", cleared.kind == arm_sim::StopKind::kProtective}});
+               {"by_lease_holder", cleared.kind == robot::StopKind::kProtective}});
     response->set_cleared_kind(to_proto(cleared.kind));
     response->set_cleared_reason(cleared.reason);
     return grpc::Status::OK;

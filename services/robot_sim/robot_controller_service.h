@@ -1,6 +1,7 @@
 #pragma once
-// pnp.robot.v1.RobotControllerService and SimulatedSceneService over the arm stand-in
-// (arm_sim::ControllerStandIn): the protocol's messages in, the stand-in's reports out.
+// pnp.robot.v1.RobotControllerService over any controller (robot::ArmController: the
+// simulated Panda's, a Franka's through the bridge) and SimulatedSceneService over the
+// stand-in (arm_sim::ControllerStandIn): the protocol's messages in, the reports out.
 // A drive stream must open with a valid lease; each target is answered by exactly one
 // feedback message; a bad target is a status in its feedback, never a broken stream. A
 // new stream cancels the one before it. Stops and their clearing are logged with who and
@@ -24,8 +25,7 @@ std::string clearing_operator(const std::string& principal, const std::string& s
 class RobotControllerServiceImpl final : public robot::v1::RobotControllerService::Service {
  public:
   // `limits` (null: none) bounds the pose streams; it must outlive the service.
-  explicit RobotControllerServiceImpl(arm_sim::ControllerStandIn& arm,
-                                      StreamLimits* limits = nullptr)
+  explicit RobotControllerServiceImpl(robot::ArmController& arm, StreamLimits* limits = nullptr)
       : arm_(arm), limits_(limits) {}
 
   grpc::Status AcquireLease(grpc::ServerContext* context,
@@ -46,7 +46,7 @@ class RobotControllerServiceImpl final : public robot::v1::RobotControllerServic
                       robot::v1::ResumeResponse* response) override;
 
  private:
-  arm_sim::ControllerStandIn& arm_;
+  robot::ArmController& arm_;
   StreamLimits* limits_;
   std::mutex stream_mutex_;
   grpc::ServerContext* current_stream_ = nullptr;  // guarded by stream_mutex_

@@ -69,14 +69,14 @@ TEST(ArmMonitor, RecordsEachTargetTakenInAndJudgesItAgainstABox) {
   const auto lease = arm.acquire_lease("test", 5);
   const std::uint64_t stream = arm.open_stream(lease.id);
   const geometry::Pose start = arm.state().arm.commanded_base;
-  arm_sim::TargetRequest target;
+  robot::TargetRequest target;
   target.sequence = 1;
   target.frame_id = arm.base_frame_id();
   target.position_m = start.position_m + Eigen::Vector3d(0, 0, -0.02);
   target.orientation = start.orientation;
   target.gripper_width_m = 0.04;
   target.stamp = std::chrono::system_clock::now();
-  ASSERT_EQ(arm.take_target(lease.id, stream, target).status, arm_sim::ControllerStatus::kOk);
+  ASSERT_EQ(arm.take_target(lease.id, stream, target).status, robot::ControllerStatus::kOk);
   for (int i = 0; i < 200 && monitor.targets_taken() == 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }

@@ -533,7 +533,7 @@ TEST_F(GatewayEndToEnd, AHoldTheControllerRefusesEndsTheEpisodeThere) {
     events_.push_back({std::string(event), fields});
     if (event == "arrival_wait" && wait_step < 0) {
       wait_step = fields["step"].get<int>();
-      arm_->stop("a person walked into the cell", arm_sim::StopKind::kEmergency);
+      arm_->stop("a person walked into the cell", robot::StopKind::kEmergency);
     }
   };
   EpisodeOptions traced = episode(903);
@@ -624,7 +624,7 @@ TEST_F(GatewayEndToEnd, InterruptEmergencyStopsTheArmAndEndsTheRun) {
   EXPECT_TRUE(ends_run(report.end));
   EXPECT_EQ(report.arm_left, "emergency_stop");
   EXPECT_EQ(arm_->state().arm.mode, arm_sim::ArmMode::kStopped);
-  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
+  EXPECT_EQ(arm_->state().stop_kind, robot::StopKind::kEmergency);
 }
 
 // Ctrl-C while the runner still waits for an inference service that is not up (before the
@@ -645,7 +645,7 @@ TEST_F(GatewayEndToEnd, InterruptWhileWaitingForInferenceStillEmergencyStopsTheA
       << report.reason;
   EXPECT_EQ(report.steps, 0);
   EXPECT_EQ(report.arm_left, "emergency_stop");
-  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
+  EXPECT_EQ(arm_->state().stop_kind, robot::StopKind::kEmergency);
 }
 
 TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
@@ -668,7 +668,7 @@ TEST_F(GatewayEndToEnd, StalledInferenceHoldsTheArmAndEndsTheEpisode) {
   EXPECT_LT((after.arm.commanded_base.position_m - before.arm.commanded_base.position_m).norm(),
             1e-9);
   EXPECT_EQ(report.arm_left, "protective_stop");
-  EXPECT_EQ(after.stop_kind, arm_sim::StopKind::kProtective);
+  EXPECT_EQ(after.stop_kind, robot::StopKind::kProtective);
   EXPECT_EQ(count("deadman"), 1);
   stalled_server.shutdown(std::chrono::milliseconds(100));
 }
@@ -851,7 +851,7 @@ TEST_F(GatewayEndToEnd, InterruptDuringAStallStopsTheArm) {
   interrupter.join();
   EXPECT_EQ(report.end, EpisodeEnd::kInterrupted) << report.reason;
   EXPECT_EQ(report.arm_left, "emergency_stop");
-  EXPECT_EQ(arm_->state().stop_kind, arm_sim::StopKind::kEmergency);
+  EXPECT_EQ(arm_->state().stop_kind, robot::StopKind::kEmergency);
   server.shutdown(std::chrono::milliseconds(100));
 }
 
@@ -860,7 +860,7 @@ TEST_F(GatewayEndToEnd, AnEmergencyStopEndsTheRunUntilAnOperatorClearsIt) {
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
   const robot::GatewayConfig config = panda_config();
   GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
-  arm_->stop("a person walked into the cell", arm_sim::StopKind::kEmergency);
+  arm_->stop("a person walked into the cell", robot::StopKind::kEmergency);
   const EpisodeReport report = runner.run(episode(908), not_interrupted_);
   EXPECT_EQ(report.end, EpisodeEnd::kStopped);
   EXPECT_TRUE(ends_run(report.end));

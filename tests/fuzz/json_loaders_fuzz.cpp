@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "arm_sim/controller_limits.h"
+#include "robot/controller_limits.h"
 #include "geometry/rigid_transform.h"
 #include "robot/gateway_config.h"
 #include "security/auth_policy.h"
@@ -30,7 +30,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         pnp::robot::GatewayConfig::from_json(json);
         break;
       case 1:
-        pnp::arm_sim::ControllerLimits::from_json(json);
+        pnp::robot::ControllerLimits::from_json(json);
         break;
       case 2:
         pnp::training::spec_from_json(json).validate();

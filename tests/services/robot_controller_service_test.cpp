@@ -283,7 +283,7 @@ TEST_F(RobotControllerServiceTest, TheControllersOwnLimitsHoldWithoutTheGateway)
   ASSERT_TRUE(acquire("raw", &lease).ok());
   ASSERT_TRUE(reset(lease, 5).ok());
   auto drive = open(lease);
-  const double floor = arm_sim::ControllerLimits{}.workspace.min_m.z();
+  const double floor = robot::ControllerLimits{}.workspace.min_m.z();
   const double z = state().state().commanded().position().z_m();
   auto below_table = target_above(1, floor - z - 0.02);
   const auto table = send(*drive, below_table);

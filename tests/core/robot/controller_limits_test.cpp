@@ -1,4 +1,4 @@
-#include "arm_sim/controller_limits.h"
+#include "robot/controller_limits.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include "robot/gateway_config.h"
 #include "sim/panda_hand.h"
 
-namespace pnp::arm_sim {
+namespace pnp::robot {
 namespace {
 
 std::string refusal_for(const nlohmann::json& j) {
@@ -82,4 +82,4 @@ TEST(ControllerLimits, RefusesOutsideTheBoxAndTooFarAStep) {
 }
 
 }  // namespace
-}  // namespace pnp::arm_sim
+}  // namespace pnp::robot

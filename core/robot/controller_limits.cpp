@@ -1,4 +1,4 @@
-#include "arm_sim/controller_limits.h"
+#include "robot/controller_limits.h"
 
 #include <fmt/format.h>
 
@@ -6,11 +6,11 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "arm_sim/simulated_arm.h"
 #include "common/error.h"
+#include "robot/arm_backend.h"
 #include "robot/json_fields.h"
 
-namespace pnp::arm_sim {
+namespace pnp::robot {
 namespace {
 
 using nlohmann::json;
@@ -109,4 +109,4 @@ double ControllerLimits::capped_speed(double requested_m_per_s, double default_m
   return std::min(requested_m_per_s > 0 ? requested_m_per_s : default_m_per_s, max_speed_m_per_s);
 }
 
-}  // namespace pnp::arm_sim
+}  // namespace pnp::robot

@@ -20,20 +20,20 @@
 #include "geometry/pose.h"
 #include "robot/safety_limits.h"
 
-namespace pnp::arm_sim {
+namespace pnp::robot {
 
 struct ControllerLimits {
-  // The gateway's default box (robot::SafetyLimits) widened by 4 cm in x and y and 2 cm
+  // The gateway's default box (SafetyLimits) widened by 4 cm in x and y and 2 cm
   // upwards: the controller's box contains the gateway's, so the gateway's check refuses
   // first and this one only catches what gets past it. Its floor is the lowest grip point
   // that keeps the pads off the table.
-  robot::WorkspaceBox workspace{{0.10, -0.42, 0.013}, {0.74, 0.42, 0.50}};
+  WorkspaceBox workspace{{0.10, -0.42, 0.013}, {0.74, 0.42, 0.50}};
   double table_top_z_m = 0.0;  // in the base frame
   // From the pose the motion generator commands now: a policy step is at most 8.7 cm.
   double max_step_m = 0.15;
   // From the orientation commanded now: the policy never turns the hand, so a larger turn
   // in one target is a fault (a flipped quaternion, a wrong frame). Wider than the
-  // gateway's 0.2 rad (robot::SafetyLimits), so the gateway refuses first.
+  // gateway's 0.2 rad (SafetyLimits), so the gateway refuses first.
   double max_rotation_step_rad = 0.3;
   // The Panda's Cartesian translation limit (Franka's datasheet); a client's
   // max_speed_m_per_s is capped to it.
@@ -59,4 +59,4 @@ struct ControllerLimits {
   double capped_speed(double requested_m_per_s, double default_m_per_s) const;
 };
 
-}  // namespace pnp::arm_sim
+}  // namespace pnp::robot
