@@ -151,6 +151,8 @@ ControllerReport ArmController::take_target(const std::string& lease_id, std::ui
   } else if (arm_.reading().mode == ArmMode::kStopped) {
     refuse(ControllerStatus::kStopped,
            std::string(stop_kind_name(stop_kind_)) + " stop: " + stop_reason_);
+  } else if (const BackendReading arm = arm_.reading(); arm.mode == ArmMode::kFault) {
+    refuse(ControllerStatus::kStopped, "the arm faulted: " + arm.fault);
   } else if (auto error = target_error(target)) {
     refuse(ControllerStatus::kInvalidTarget, std::move(*error));
   } else if (auto stale = stale_error(target)) {
@@ -188,6 +190,15 @@ ControllerReport ArmController::report_locked(ControllerStatus status,
 }
 
 void ArmController::publish_locked() {
+  // An arm that stopped itself (a reflex, a stalled state topic) is under an emergency
+  // stop from here on: its reason is what an operator acknowledges to clear it.
+  if (stop_kind_ == StopKind::kNone) {
+    const BackendReading arm = arm_.reading();
+    if (arm.mode == ArmMode::kStopped && !arm.fault.empty()) {
+      stop_kind_ = StopKind::kEmergency;
+      stop_reason_ = arm.fault;
+    }
+  }
   ControllerReport report = report_locked(ControllerStatus::kOk, {});
   std::lock_guard lock(published_mutex_);
   published_ = std::move(report);

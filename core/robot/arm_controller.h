@@ -7,7 +7,8 @@
 // limits (controller_limits.h). Anyone may stop the arm, at once: an emergency stop lasts
 // until an operator clears it acknowledging its reason; a protective stop (what a client
 // sends when it loses track of the arm) may be cleared by the lease holder, as libfranka's
-// automatic error recovery clears a reflex.
+// automatic error recovery clears a reflex. An arm that stops itself (a real arm's reflex,
+// BackendReading::fault) is under an emergency stop with that reason.
 //
 // Thread-safe: every call takes the controller's lock; state() reads the snapshot
 // published after each change, so it never waits for the arm. A backend with a clock of
