@@ -22,7 +22,7 @@
 #include "robot/gateway_config.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"
 #include "tools/common/cli.h"

@@ -18,7 +18,7 @@
 #include "common/percentile.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "sim/panda_hand.h"
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"

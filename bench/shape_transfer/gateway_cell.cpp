@@ -13,7 +13,7 @@
 #include "nn/checkpoint_io.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "sim/world_model.h"
 #include "store/checkpoint_import.h"
 #include "store/run_store.h"

@@ -17,7 +17,7 @@
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "services/store/remote_audit.h"
 #include "services/store/store_flags.h"
 

@@ -20,7 +20,7 @@
 #include "services/common/convert.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "serving/served_policy.h"
 #include "sim/panda_hand.h"
 #include "store/run_store.h"

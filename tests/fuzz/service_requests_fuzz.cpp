@@ -36,7 +36,7 @@
 #include "pnp/train/v1/train_service.grpc.pb.h"
 #include "services/common/server_runtime.h"
 #include "services/inference/policy_service.h"
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 #include "services/sim/sim_service.h"
 #include "services/train/training_service.h"
 #include "store/checkpoint_import.h"

@@ -1,7 +1,7 @@
 // pnp.robot.v1 over the controller stand-in, in process over loopback with real stubs:
 // the lease, the drive stream's rules, E-stop and resume, scene resets, and refusals.
 
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_sim/simulated_scene_service.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "services/robot_sim/feedback_convert.h"
+#include "services/robot_controller/feedback_convert.h"
 
 #include "common/error.h"
 #include "services/common/robot_convert.h"

@@ -1,4 +1,4 @@
-#include "services/robot_sim/robot_controller_service.h"
+#include "services/robot_controller/robot_controller_service.h"
 
 #include <cmath>
 
@@ -8,7 +8,7 @@
 #include "services/common/server_runtime.h"
 #include "services/common/status.h"
 #include "services/common/time_convert.h"
-#include "services/robot_sim/feedback_convert.h"
+#include "services/robot_controller/feedback_convert.h"
 
 namespace pnp::services {
 namespace {
@@ -28,11 +28,11 @@ robot::TargetRequest from_proto(const robot::v1::PoseTarget& target) {
   return request;
 }
 
+}  // namespace
+
 void require_lease_id(const std::string& lease_id) {
   if (lease_id.empty()) throw_invalid_argument("lease_id", "the id AcquireLease returned", "\"\"");
 }
-
-}  // namespace
 
 grpc::Status RobotControllerServiceImpl::AcquireLease(grpc::ServerContext*,
                                                       const robot::v1::AcquireLeaseRequest* request,
@@ -155,18 +155,6 @@ grpc::Status RobotControllerServiceImpl::Resume(grpc::ServerContext* context,
                {"by_lease_holder", cleared.kind == robot::StopKind::kProtective}});
     response->set_cleared_kind(to_proto(cleared.kind));
     response->set_cleared_reason(cleared.reason);
-    return grpc::Status::OK;
-  });
-}
-
-grpc::Status SimulatedSceneServiceImpl::ResetScene(grpc::ServerContext*,
-                                                   const robot::v1::ResetSceneRequest* request,
-                                                   robot::v1::ResetSceneResponse* response) {
-  return guarded([&] {
-    require_lease_id(request->lease_id());
-    const auto reset = arm_.reset_scene(request->lease_id(), request->seed());
-    to_proto(reset.report, arm_.base_frame_id(), *response->mutable_state());
-    to_proto(reset.goal_base, *response->mutable_goal());
     return grpc::Status::OK;
   });
 }

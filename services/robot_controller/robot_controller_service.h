@@ -1,7 +1,7 @@
 #pragma once
 // pnp.robot.v1.RobotControllerService over any controller (robot::ArmController: the
-// simulated Panda's, a Franka's through the bridge) and SimulatedSceneService over the
-// stand-in (arm_sim::ControllerStandIn): the protocol's messages in, the reports out.
+// simulated Panda's in pnp-robot-sim, a Franka's in pnp-franka-bridge): the protocol's
+// messages in, the controller's reports out.
 // A drive stream must open with a valid lease; each target is answered by exactly one
 // feedback message; a bad target is a status in its feedback, never a broken stream. A
 // new stream cancels the one before it. Stops and their clearing are logged with who and
@@ -10,8 +10,8 @@
 #include <mutex>
 #include <string>
 
-#include "arm_sim/controller_stand_in.h"
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
+#include "robot/arm_controller.h"
 #include "services/common/stream_limits.h"
 
 namespace pnp::services {
@@ -21,6 +21,9 @@ namespace pnp::services {
 // it in the log), so nobody can clear an emergency stop in another operator's name;
 // without a policy (`principal` empty) it is the name the request states.
 std::string clearing_operator(const std::string& principal, const std::string& stated);
+
+// INVALID_ARGUMENT for an empty lease id, naming the field.
+void require_lease_id(const std::string& lease_id);
 
 class RobotControllerServiceImpl final : public robot::v1::RobotControllerService::Service {
  public:
@@ -50,17 +53,6 @@ class RobotControllerServiceImpl final : public robot::v1::RobotControllerServic
   StreamLimits* limits_;
   std::mutex stream_mutex_;
   grpc::ServerContext* current_stream_ = nullptr;  // guarded by stream_mutex_
-};
-
-class SimulatedSceneServiceImpl final : public robot::v1::SimulatedSceneService::Service {
- public:
-  explicit SimulatedSceneServiceImpl(arm_sim::ControllerStandIn& arm) : arm_(arm) {}
-
-  grpc::Status ResetScene(grpc::ServerContext* context, const robot::v1::ResetSceneRequest* request,
-                          robot::v1::ResetSceneResponse* response) override;
-
- private:
-  arm_sim::ControllerStandIn& arm_;
 };
 
 }  // namespace pnp::services
