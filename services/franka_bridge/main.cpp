@@ -21,6 +21,7 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/franka_bridge/ros_franka_link.h"
+#include "services/franka_ros/ros_node.h"
 #include "services/robot_controller/robot_controller_service.h"
 #include "services/store/remote_audit.h"
 #include "services/store/store_flags.h"

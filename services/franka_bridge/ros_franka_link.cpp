@@ -16,78 +16,10 @@
 #include "franka_gripper/MoveAction.h"
 #include "franka_msgs/ErrorRecoveryAction.h"
 #include "franka_msgs/FrankaState.h"
+#include "services/franka_ros/franka_errors.h"
 
 namespace pnp::services {
 namespace {
-
-// The names of the Errors flags that are set, as franka_msgs spells them.
-std::vector<std::string> set_errors(const franka_msgs::Errors& e) {
-  std::vector<std::string> names;
-  const auto add = [&](bool set, const char* name) {
-    if (set) names.emplace_back(name);
-  };
-  add(e.joint_position_limits_violation, "joint_position_limits_violation");
-  add(e.cartesian_position_limits_violation, "cartesian_position_limits_violation");
-  add(e.self_collision_avoidance_violation, "self_collision_avoidance_violation");
-  add(e.joint_velocity_violation, "joint_velocity_violation");
-  add(e.cartesian_velocity_violation, "cartesian_velocity_violation");
-  add(e.force_control_safety_violation, "force_control_safety_violation");
-  add(e.joint_reflex, "joint_reflex");
-  add(e.cartesian_reflex, "cartesian_reflex");
-  add(e.max_goal_pose_deviation_violation, "max_goal_pose_deviation_violation");
-  add(e.max_path_pose_deviation_violation, "max_path_pose_deviation_violation");
-  add(e.cartesian_velocity_profile_safety_violation, "cartesian_velocity_profile_safety_violation");
-  add(e.joint_position_motion_generator_start_pose_invalid,
-      "joint_position_motion_generator_start_pose_invalid");
-  add(e.joint_motion_generator_position_limits_violation,
-      "joint_motion_generator_position_limits_violation");
-  add(e.joint_motion_generator_velocity_limits_violation,
-      "joint_motion_generator_velocity_limits_violation");
-  add(e.joint_motion_generator_velocity_discontinuity,
-      "joint_motion_generator_velocity_discontinuity");
-  add(e.joint_motion_generator_acceleration_discontinuity,
-      "joint_motion_generator_acceleration_discontinuity");
-  add(e.cartesian_position_motion_generator_start_pose_invalid,
-      "cartesian_position_motion_generator_start_pose_invalid");
-  add(e.cartesian_motion_generator_elbow_limit_violation,
-      "cartesian_motion_generator_elbow_limit_violation");
-  add(e.cartesian_motion_generator_velocity_limits_violation,
-      "cartesian_motion_generator_velocity_limits_violation");
-  add(e.cartesian_motion_generator_velocity_discontinuity,
-      "cartesian_motion_generator_velocity_discontinuity");
-  add(e.cartesian_motion_generator_acceleration_discontinuity,
-      "cartesian_motion_generator_acceleration_discontinuity");
-  add(e.cartesian_motion_generator_elbow_sign_inconsistent,
-      "cartesian_motion_generator_elbow_sign_inconsistent");
-  add(e.cartesian_motion_generator_start_elbow_invalid,
-      "cartesian_motion_generator_start_elbow_invalid");
-  add(e.cartesian_motion_generator_joint_position_limits_violation,
-      "cartesian_motion_generator_joint_position_limits_violation");
-  add(e.cartesian_motion_generator_joint_velocity_limits_violation,
-      "cartesian_motion_generator_joint_velocity_limits_violation");
-  add(e.cartesian_motion_generator_joint_velocity_discontinuity,
-      "cartesian_motion_generator_joint_velocity_discontinuity");
-  add(e.cartesian_motion_generator_joint_acceleration_discontinuity,
-      "cartesian_motion_generator_joint_acceleration_discontinuity");
-  add(e.cartesian_position_motion_generator_invalid_frame,
-      "cartesian_position_motion_generator_invalid_frame");
-  add(e.force_controller_desired_force_tolerance_violation,
-      "force_controller_desired_force_tolerance_violation");
-  add(e.controller_torque_discontinuity, "controller_torque_discontinuity");
-  add(e.start_elbow_sign_inconsistent, "start_elbow_sign_inconsistent");
-  add(e.communication_constraints_violation, "communication_constraints_violation");
-  add(e.power_limit_violation, "power_limit_violation");
-  add(e.joint_p2p_insufficient_torque_for_planning, "joint_p2p_insufficient_torque_for_planning");
-  add(e.tau_j_range_violation, "tau_j_range_violation");
-  add(e.instability_detected, "instability_detected");
-  add(e.joint_move_in_wrong_direction, "joint_move_in_wrong_direction");
-  add(e.cartesian_spline_motion_generator_violation, "cartesian_spline_motion_generator_violation");
-  add(e.joint_via_motion_generator_planning_joint_limit_violation,
-      "joint_via_motion_generator_planning_joint_limit_violation");
-  add(e.base_acceleration_initialization_timeout, "base_acceleration_initialization_timeout");
-  add(e.base_acceleration_invalid_reading, "base_acceleration_invalid_reading");
-  return names;
-}
 
 // When a message was measured, on this process's steady clock: its arrival, less how old
 // its stamp says it was (a tracker's latency counts against its freshness).
@@ -100,18 +32,6 @@ robot::SteadyTime measured_at(const ros::Time& stamp) {
 }
 
 }  // namespace
-
-void init_ros_node(int& argc, char** argv, const std::string& node_name) {
-  ros::init(argc, argv, node_name, ros::init_options::NoSigintHandler);
-}
-
-bool ros_master_reachable() {
-  return ros::master::check();
-}
-
-void shutdown_ros_node() {
-  ros::shutdown();
-}
 
 struct RosFrankaLink::Impl {
   Impl(const FrankaTopics& t, FrankaInputs in)
@@ -133,7 +53,7 @@ struct RosFrankaLink::Impl {
     std::copy(msg.F_T_EE.begin(), msg.F_T_EE.end(), s.F_T_EE.begin());
     std::copy(msg.q.begin(), msg.q.end(), s.q.begin());
     s.robot_mode = msg.robot_mode;
-    s.current_errors = set_errors(msg.current_errors);
+    s.current_errors = set_error_names(msg.current_errors);
     inputs.on_state(s);
   }
 

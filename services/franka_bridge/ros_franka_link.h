@@ -45,13 +45,6 @@ struct FrankaInputs {
   std::function<void(const std::string& topic, const std::string& why)> on_refused;
 };
 
-// ros::init for this process (before any link; the node installs no signal handler: the
-// bridge's own shutdown handles SIGINT/SIGTERM). Reads ROS_MASTER_URI as any node does.
-void init_ros_node(int& argc, char** argv, const std::string& node_name);
-// True once the ROS master answers.
-bool ros_master_reachable();
-void shutdown_ros_node();
-
 class RosFrankaLink final : public robot::FrankaCommands {
  public:
   // Subscribes and advertises at once; callbacks arrive on a ROS spinner thread from then

@@ -14,6 +14,7 @@
 #include "franka_gripper/StopAction.h"
 #include "franka_msgs/ErrorRecoveryAction.h"
 #include "franka_msgs/FrankaState.h"
+#include "services/franka_ros/franka_errors.h"
 
 namespace {
 
@@ -65,6 +66,30 @@ TEST(FrankaMessages, RobotModesKeepFrankaRosNumbers) {
   EXPECT_EQ(franka_msgs::FrankaState::ROBOT_MODE_REFLEX, 4);
   EXPECT_EQ(franka_msgs::FrankaState::ROBOT_MODE_USER_STOPPED, 5);
   EXPECT_EQ(franka_msgs::FrankaState::ROBOT_MODE_AUTOMATIC_ERROR_RECOVERY, 6);
+}
+
+// The one table of error names has every flag of Errors, each under its own name.
+TEST(FrankaMessages, EveryErrorFlagIsReadAndSetByItsName) {
+  franka_msgs::Errors errors;
+  EXPECT_TRUE(pnp::services::set_error_names(errors).empty());
+  EXPECT_TRUE(pnp::services::set_error_flag(errors, "cartesian_reflex"));
+  EXPECT_EQ(errors.cartesian_reflex, 1);
+  EXPECT_EQ(pnp::services::set_error_names(errors), std::vector<std::string>{"cartesian_reflex"});
+  EXPECT_FALSE(pnp::services::set_error_flag(errors, "not_an_error"));
+  // Serialised, the message is 41 bytes: one per flag, so the table misses none.
+  EXPECT_EQ(ros::serialization::serializationLength(errors), 41u);
+  const std::vector<std::string> all = [] {
+    std::vector<std::string> names;
+    franka_msgs::Errors every;
+    for (const char* name : {"joint_position_limits_violation", "base_acceleration_invalid_reading",
+                             "tau_j_range_violation", "joint_reflex"}) {
+      pnp::services::set_error_flag(every, name);
+    }
+    return pnp::services::set_error_names(every);
+  }();
+  EXPECT_EQ(all, (std::vector<std::string>{"joint_position_limits_violation", "joint_reflex",
+                                           "tau_j_range_violation",
+                                           "base_acceleration_invalid_reading"}));
 }
 
 }  // namespace

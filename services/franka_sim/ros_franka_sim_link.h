@@ -1,0 +1,74 @@
+#pragma once
+// pnp-franka-sim's ROS 1 side: what franka_ros's nodes publish and serve, with the
+// stand-in Franka behind it. Built as C++17 (proto/ros/README.md); ROS stays out of
+// this header.
+//
+// Publishes franka_msgs/FrankaState (franka_state_controller), the arm's and the
+// fingers' sensor_msgs/JointState, and (the stand-in's "tracker") the object's
+// geometry_msgs/PoseStamped. Subscribes the impedance controller's equilibrium pose.
+// Serves franka_gripper's move and grasp and franka_control's error_recovery actions.
+// For tests only: std_msgs/String on <control>/inject_reflex puts the arm into a reflex
+// with that error, std_msgs/UInt64 on <control>/reset_scene starts that seed's episode.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry/pose.h"
+
+namespace pnp::services {
+
+struct FrankaSimTopics {
+  std::string state = "/franka_state_controller/franka_states";
+  std::string arm_joints = "/franka_state_controller/joint_states";
+  std::string finger_joints = "/franka_gripper/joint_states";
+  std::string equilibrium_pose = "/cartesian_impedance_example_controller/equilibrium_pose";
+  std::string object_pose = "/pnp/object_pose";
+  std::string gripper = "/franka_gripper";
+  std::string error_recovery = "/franka_control/error_recovery";
+  std::string control = "/pnp_franka_sim";
+  std::string base_frame = "panda_link0";
+};
+
+// One state as FrankaState carries it (matrices column-major).
+struct FrankaSimReport {
+  double time_s = 0;
+  std::array<double, 16> O_T_EE{}, O_T_EE_d{}, F_T_EE{};
+  std::array<double, 7> q{}, dq{}, tau_J{};
+  std::uint8_t robot_mode = 0;
+  std::vector<std::string> current_errors;
+  double finger_gap_m = 0;
+  geometry::Pose object_base;
+};
+
+// What arrives, from ROS's threads; each returns whether the request succeeded.
+struct FrankaSimInputs {
+  std::function<void(const geometry::Pose& ee_base)> on_equilibrium;
+  std::function<bool(double width_m)> on_move;
+  std::function<bool(double width_m)> on_grasp;
+  std::function<bool()> on_error_recovery;
+  std::function<void(const std::string& error_name)> on_inject_reflex;
+  std::function<void(std::uint64_t seed)> on_reset_scene;
+};
+
+class RosFrankaSimLink {
+ public:
+  RosFrankaSimLink(const FrankaSimTopics& topics, FrankaSimInputs inputs);
+  ~RosFrankaSimLink();
+  RosFrankaSimLink(const RosFrankaSimLink&) = delete;
+  RosFrankaSimLink& operator=(const RosFrankaSimLink&) = delete;
+
+  void publish_state(const FrankaSimReport& report);       // FrankaState and arm joints
+  void publish_fingers(double finger_gap_m);               // the fingers' joint states
+  void publish_object(const geometry::Pose& object_base);  // the tracker
+  void stop_callbacks();  // none runs after this returns (also on destruction)
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pnp::services
