@@ -46,8 +46,9 @@ FrankaStandIn::FrankaStandIn(const FrankaStandInOptions& options)
   }
 }
 
-void FrankaStandIn::set_equilibrium(const geometry::Pose& ee_base) {
-  if (!errors_.empty()) return;
+void FrankaStandIn::set_equilibrium(const geometry::Pose& ee_base,
+                                    std::chrono::system_clock::time_point stamp) {
+  if (!errors_.empty() || stamp < last_reset_) return;
   if (!geometry::is_finite(ee_base) ||
       !(std::abs(ee_base.orientation.norm() - 1.0) <= kUnitQuaternionTolerance)) {
     return;
@@ -114,21 +115,12 @@ void FrankaStandIn::advance(double seconds) {
   for (long k = 0; k < ticks; ++k) {
     apply_equilibrium();
     arm_.advance(kControlPeriod_s);
-    const ArmState s = arm_.state();
-    if (s.mode == ArmMode::kFault) {
-      reflex("instability_detected");
-      continue;
-    }
-    for (std::size_t j = 0; j < s.joint_torques_demanded.size(); ++j) {
-      if (std::abs(s.joint_torques_demanded[j]) > arm_.options().torque_limits_nm[j]) {
-        reflex("joint_reflex");
-        break;
-      }
-    }
+    if (arm_.state().mode == ArmMode::kFault) reflex("instability_detected");
   }
 }
 
-Episode FrankaStandIn::reset(std::uint64_t seed) {
+Episode FrankaStandIn::reset(std::uint64_t seed, std::chrono::system_clock::time_point now) {
+  last_reset_ = now;
   errors_.clear();
   pending_equilibrium_.reset();
   equilibrium_grip_.reset();

@@ -5,14 +5,18 @@
 // effector (the configured F_T_EE, by default a Franka Hand's: 0.1034 m down the flange,
 // turned -45 degrees), reports the state FrankaState carries, moves and grasps with the
 // hand, and goes into a reflex where a Panda would, until error recovery:
-//   - joint_reflex: a joint torque demanded beyond the Panda's limits;
+//   - cartesian_motion_generator_joint_position_limits_violation: an equilibrium the arm
+//     cannot reach within its joint limits;
 //   - cartesian_reflex: an equilibrium further than reflex_deviation_m from the end
 //     effector (the impedance spring would pull with a force the Panda refuses);
 //   - instability_detected: the physics failed;
 //   - any error a test injects (inject_reflex).
+// Its joint torques are those of the simulated arm's own tracking loop (clamped to the
+// Panda's limits), not of franka_ros's impedance controller, so they raise no reflex.
 // Not thread-safe: one owner calls everything (pnp-franka-sim under its own lock).
 
 #include <Eigen/Core>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -57,9 +61,11 @@ class FrankaStandIn {
  public:
   explicit FrankaStandIn(const FrankaStandInOptions& options);
 
-  // The impedance controller's new equilibrium (end effector, base frame); ignored in a
-  // reflex. Non-finite or non-unit poses are ignored too (a real controller would fault).
-  void set_equilibrium(const geometry::Pose& ee_base);
+  // The impedance controller's new equilibrium (end effector, base frame), stamped when
+  // it was sent; ignored in a reflex, and when sent before the last reset (it was meant for
+  // the scene before). Non-finite or non-unit poses are ignored too (a real controller
+  // would fault).
+  void set_equilibrium(const geometry::Pose& ee_base, std::chrono::system_clock::time_point stamp);
   // franka_gripper's move and grasp: false when refused (a width outside 0 to 0.08 m).
   bool gripper_move(double width_m);
   bool gripper_grasp(double width_m);
@@ -68,8 +74,9 @@ class FrankaStandIn {
   void inject_reflex(const std::string& error_name);
   // Runs the 1 kHz control loop for `seconds`, the reflex checks after each tick.
   void advance(double seconds);
-  // The home posture and the episode `seed` puts the object and goal at.
-  Episode reset(std::uint64_t seed);
+  // The home posture and the episode `seed` puts the object and goal at, as of `now`.
+  Episode reset(std::uint64_t seed,
+                std::chrono::system_clock::time_point now = std::chrono::system_clock::now());
 
   FrankaStandInState state() const;
   const SimulatedArm& arm() const { return arm_; }
@@ -84,6 +91,7 @@ class FrankaStandIn {
   std::optional<geometry::Pose> equilibrium_grip_;     // the last one applied
   double gripper_width_m_;
   std::vector<std::string> errors_;
+  std::chrono::system_clock::time_point last_reset_{};
 };
 
 }  // namespace pnp::arm_sim

@@ -154,6 +154,7 @@ void FrankaBackend::tick(SteadyTime now, double dt_s) {
              std::to_string(options_.recovery_timeout_s) + " s" +
              (fault ? " (" + *fault + ")" : std::string());
   }
+  if (paused_) return;
   motion_->advance(dt_s);
   commands_.send_equilibrium_pose(ee_from_grip(motion_->setpoint()));
 }
@@ -240,6 +241,18 @@ void FrankaBackend::command_gripper(double width_m) {
     commands_.send_gripper_move(width_m, options_.gripper_speed_m_per_s);
   }
   gripper_goal_m_ = width_m;
+}
+
+void FrankaBackend::rest_at_measured() {
+  paused_ = false;
+  if (motion_) motion_->reset(measured_grip_);
+  tracking_ = false;
+  gripper_goal_m_.reset();
+}
+
+std::optional<SteadyTime> FrankaBackend::last_state_received() const {
+  if (!state_) return std::nullopt;
+  return state_->received;
 }
 
 void FrankaBackend::stop() {

@@ -97,6 +97,14 @@ class FrankaBackend final : public ArmBackend {
   // advanced by `dt_s`, the equilibrium pose sent (nothing before the first state).
   void tick(SteadyTime now, double dt_s);
 
+  // Something else is about to move the arm (a simulated scene reset): no equilibrium is
+  // sent until rest_at_measured(), which then holds where the arm now is, with no target
+  // and no gripper goal.
+  void pause_streaming() { paused_ = true; }
+  void rest_at_measured();
+  // When the latest readable state arrived (nullopt: none yet).
+  std::optional<SteadyTime> last_state_received() const;
+
   BackendReading reading() const override;
   IntakeOutcome command(const ArmTarget& target) override;
   double default_max_speed_m_per_s() const override { return options_.motion.speed_m_per_s; }
@@ -122,6 +130,7 @@ class FrankaBackend final : public ArmBackend {
   SteadyTime now_{};
   SteadyTime recovery_started_{};
   bool tracking_ = false;  // a target was accepted since the last hold
+  bool paused_ = false;    // pause_streaming(): nothing is sent
   double gripper_width_m_ = 0;
   std::optional<double> gripper_goal_m_;  // the last width a move or grasp was sent for
   std::optional<TrackedObject> object_;

@@ -4,6 +4,12 @@
 // streaming loop calls tick(); each runs under the controller's lock and publishes the
 // state, so a reflex or a stall is a stop the moment it is seen.
 
+#include <chrono>
+#include <string>
+#include <thread>
+#include <utility>
+
+#include "common/error.h"
 #include "robot/arm_controller.h"
 #include "robot/franka_backend.h"
 
@@ -38,6 +44,50 @@ class FrankaController : private detail::FrankaBackendHolder, public ArmControll
   }
   void tick(SteadyTime now, double dt_s) {
     run_tick([&] { backend.tick(now, dt_s); });
+  }
+
+  // A simulated arm's scene reset, done by `reset` (which moves the arm elsewhere): the
+  // lease is checked first (FAILED_PRECONDITION), then, once a state measured after the
+  // reset has arrived (UNAVAILABLE if none within `state_wait_s`), the bridge holds where
+  // the arm now is. Returns what `reset` returned and the controller's report.
+  template <typename Reset>
+  auto reset_scene(const std::string& lease_id, Reset&& reset, double state_wait_s = 1.0) {
+    {
+      const CallerLock lock(*this);
+      require_lease(lease_id, LeaseBook::Clock::now());
+      require_not_stopped("resetting the scene");
+      backend.pause_streaming();
+    }
+    auto result = [&] {
+      try {
+        return reset();
+      } catch (...) {  // the arm did not move: stream its set point again
+        const CallerLock lock(*this);
+        backend.rest_at_measured();
+        throw;
+      }
+    }();
+    const SteadyTime done = std::chrono::steady_clock::now();
+    const SteadyTime deadline = done + std::chrono::duration_cast<SteadyTime::duration>(
+                                           std::chrono::duration<double>(state_wait_s));
+    while (true) {
+      {
+        const CallerLock lock(*this);
+        const auto received = backend.last_state_received();
+        if (received && *received > done) {
+          backend.rest_at_measured();
+          publish_locked();
+          return std::pair{std::move(result), report_locked(ControllerStatus::kOk, {})};
+        }
+      }
+      if (std::chrono::steady_clock::now() > deadline) {
+        const CallerLock lock(*this);
+        backend.rest_at_measured();
+        throw Error(ErrorCode::kUnavailable, "no FrankaState after the scene reset within " +
+                                                 std::to_string(state_wait_s) + " s");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
   }
 };
 

@@ -13,7 +13,9 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <thread>
+#include <vector>
 
 #include "common/error.h"
 #include "robot/franka_controller.h"
@@ -21,6 +23,7 @@
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
 #include "services/franka_bridge/ros_franka_link.h"
+#include "services/franka_bridge/stand_in_scene_service.h"
 #include "services/franka_ros/ros_node.h"
 #include "services/robot_controller/robot_controller_service.h"
 #include "services/store/remote_audit.h"
@@ -74,7 +77,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Franka Emika Panda under franka_ros as a pnp.robot.v1 controller",
                "pnp-franka-bridge"};
   std::string address = "127.0.0.1:50071";
-  std::string metrics_address, limits;
+  std::string metrics_address, limits, stand_in_scene;
   double stream_hz = 1000;
   FrankaTopics topics;
   pnp::robot::FrankaBackendOptions backend;
@@ -93,6 +96,14 @@ int main(int argc, char** argv) {
                  "a tracker pose older than this is no pose")
       ->capture_default_str();
   add_topic_flags(app, topics);
+  app.add_option("--stand-in-scene", stand_in_scene,
+                 "pnp-franka-sim's scene service (a loopback host:port): serve "
+                 "SimulatedSceneService for gateways driving the stand-in; never with a real arm")
+      ->check([](const std::string& a) {
+        return a.rfind("127.0.0.1:", 0) == 0 || a.rfind("localhost:", 0) == 0
+                   ? std::string()
+                   : "expected a loopback host:port (the stand-in's control, never a real arm's)";
+      });
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one; empty: off)");
   ServerSecurityFlags security_flags;
@@ -148,11 +159,19 @@ int main(int argc, char** argv) {
     StreamLimits stream_limits(stream_limit_options(limit_options, idle_timeout_s),
                                "franka_bridge");
     RobotControllerServiceImpl service(arm, &stream_limits);
+    std::optional<StandInSceneService> scene;
+    std::vector<grpc::Service*> services{&service};
+    std::vector<std::string> names{"pnp.robot.v1.RobotControllerService"};
+    if (!stand_in_scene.empty()) {
+      scene.emplace(arm, stand_in_scene);
+      services.push_back(&*scene);
+      names.emplace_back("pnp.robot.v1.SimulatedSceneService");
+    }
     MetricsRegistry metrics;
     ServerRuntime runtime({.address = address,
                            .max_message_bytes = 1 << 20,
-                           .services = {&service},
-                           .service_names = {"pnp.robot.v1.RobotControllerService"},
+                           .services = services,
+                           .service_names = names,
                            .metrics = metrics_address.empty() ? nullptr : &metrics,
                            .metrics_address = metrics_address,
                            .security = security,

@@ -17,6 +17,7 @@
 #include "common/error.h"
 #include "services/common/server_runtime.h"
 #include "services/franka_ros/ros_node.h"
+#include "services/franka_sim/franka_sim_scene_service.h"
 #include "services/franka_sim/ros_franka_sim_link.h"
 
 namespace {
@@ -73,6 +74,7 @@ int main(int argc, char** argv) {
       "Panda",
       "pnp-franka-sim"};
   std::string object = "block";
+  std::string address;
   std::string world(pnp::sim::world_profile_name(pnp::sim::kDefaultWorldProfile));
   std::uint64_t seed = 0;
   double state_hz = 100, tracker_hz = 30;
@@ -92,6 +94,9 @@ int main(int argc, char** argv) {
   app.add_option("--reflex-deviation-m", options.reflex_deviation_m,
                  "an equilibrium further than this from the end effector is a cartesian_reflex")
       ->capture_default_str();
+  app.add_option("--address", address,
+                 "host:port (loopback) for SimulatedSceneService, the stand-in's scene resets "
+                 "(port 0: any free port, printed first on stdout; empty: none)");
   app.add_option("--control", topics.control, "namespace of the test controls")
       ->capture_default_str();
   app.add_option("--base-frame", topics.base_frame, "the arm's base frame")->capture_default_str();
@@ -110,8 +115,9 @@ int main(int argc, char** argv) {
       return f();
     };
     FrankaSimInputs inputs;
-    inputs.on_equilibrium = [&](const pnp::geometry::Pose& ee) {
-      locked([&] { arm.set_equilibrium(ee); });
+    inputs.on_equilibrium = [&](const pnp::geometry::Pose& ee,
+                                std::chrono::system_clock::time_point stamp) {
+      locked([&] { arm.set_equilibrium(ee, stamp); });
     };
     inputs.on_move = [&](double w) { return locked([&] { return arm.gripper_move(w); }); };
     inputs.on_grasp = [&](double w) { return locked([&] { return arm.gripper_grasp(w); }); };
@@ -140,10 +146,24 @@ int main(int argc, char** argv) {
       every(period_of(tracker_hz), stop,
             [&] { link.publish_object(locked([&] { return arm.state().object_base; })); });
     });
-    log_event(
-        "franka_sim", "ready",
-        {{"object", object}, {"seed", seed}, {"state_hz", state_hz}, {"tracker_hz", tracker_hz}});
-    wait_for_termination_signal();
+    const nlohmann::json fields{
+        {"object", object}, {"seed", seed}, {"state_hz", state_hz}, {"tracker_hz", tracker_hz}};
+    if (address.empty()) {
+      log_event("franka_sim", "ready", fields);
+      wait_for_termination_signal();
+    } else {
+      FrankaSimSceneService scene(arm, mutex, topics.base_frame);
+      ServerRuntime runtime({.address = address,
+                             .max_message_bytes = 1 << 16,
+                             .services = {&scene},
+                             .service_names = {"pnp.robot.v1.SimulatedSceneService"},
+                             .metrics = nullptr,
+                             .metrics_address = {},
+                             .security = {},
+                             .log_name = "franka_sim"});
+      serve_until_terminated(
+          runtime, "franka_sim", [] {}, std::chrono::seconds(1), fields);
+    }
     link.stop_callbacks();
     shutdown_ros_node();
     return 0;

@@ -102,8 +102,11 @@ RosFrankaSimLink::RosFrankaSimLink(const FrankaSimTopics& topics, FrankaSimInput
         if (msg->header.frame_id != i.topics.base_frame) return;  // the controller ignores it
         const auto& p = msg->pose.position;
         const auto& q = msg->pose.orientation;
+        const std::chrono::system_clock::time_point stamp(
+            std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                std::chrono::nanoseconds(msg->header.stamp.toNSec())));
         i.inputs.on_equilibrium(
-            {Eigen::Vector3d(p.x, p.y, p.z), Eigen::Quaterniond(q.w, q.x, q.y, q.z)});
+            {Eigen::Vector3d(p.x, p.y, p.z), Eigen::Quaterniond(q.w, q.x, q.y, q.z)}, stamp);
       },
       ros::VoidConstPtr(), no_delay);
   i.inject_reflex = i.node.subscribe<std_msgs::String>(

@@ -11,6 +11,7 @@
 // with that error, std_msgs/UInt64 on <control>/reset_scene starts that seed's episode.
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -46,7 +47,8 @@ struct FrankaSimReport {
 
 // What arrives, from ROS's threads; each returns whether the request succeeded.
 struct FrankaSimInputs {
-  std::function<void(const geometry::Pose& ee_base)> on_equilibrium;
+  std::function<void(const geometry::Pose& ee_base, std::chrono::system_clock::time_point stamp)>
+      on_equilibrium;
   std::function<bool(double width_m)> on_move;
   std::function<bool(double width_m)> on_grasp;
   std::function<bool()> on_error_recovery;

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
 #include <thread>
@@ -62,15 +63,20 @@ class FrankaChain : public ::testing::Test {
     ASSERT_TRUE(wait_until([] { return ros::master::check(); }, 30s));
   }
 
-  void start_chain(const std::vector<std::string>& sim_flags = {}) {
+  // With `scene`, the stand-in serves its scene resets and the bridge forwards a gateway's.
+  void start_chain(const std::vector<std::string>& sim_flags = {}, bool scene = false) {
     std::vector<std::string> sim{PNP_BIN_DIR "/pnp-franka-sim"};
     sim.insert(sim.end(), sim_flags.begin(), sim_flags.end());
+    if (scene) sim.insert(sim.end(), {"--address", "127.0.0.1:0"});
     sim_.emplace("franka_sim", sim, dir_.path(), ros_env(dir_, master_uri_));
-    bridge_.emplace(
-        "franka_bridge",
-        std::vector<std::string>{PNP_BIN_DIR "/pnp-franka-bridge", "--address", "127.0.0.1:0",
-                                 "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"},
-        dir_.path(), ros_env(dir_, master_uri_));
+    std::vector<std::string> bridge{PNP_BIN_DIR "/pnp-franka-bridge", "--address", "127.0.0.1:0",
+                                    "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"};
+    if (scene) {
+      const int scene_port = sim_->port();
+      ASSERT_GT(scene_port, 0) << sim_->diagnostics();
+      bridge.insert(bridge.end(), {"--stand-in-scene", "127.0.0.1:" + std::to_string(scene_port)});
+    }
+    bridge_.emplace("franka_bridge", bridge, dir_.path(), ros_env(dir_, master_uri_));
     const int port = bridge_->port();
     ASSERT_GT(port, 0) << bridge_->diagnostics();
     channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
@@ -238,6 +244,53 @@ TEST_F(FrankaChain, TheTrackersObjectIsReported) {
   start_chain();
   ASSERT_TRUE(wait_until([&] { return state().state().has_object(); }, 5s));
   EXPECT_NEAR(state().state().object().pose().position().z_m(), 0.02, 0.02);
+}
+
+// The served hierarchy (the checked-in Panda one, trained in the paper world) through
+// pnp-robot-gateway, on the same scenes: through the bridge to the stand-in Franka, and
+// on pnp-robot-sim in real time. Both chains run the simulated Panda on the wall clock,
+// so their episodes differ by timing; the bridge must not cost more than two episodes.
+TEST_F(FrankaChain, TheGatewayDrivesTheBridgeAsItDrivesTheSimulatedController) {
+  start_chain(std::vector<std::string>{"--world", "paper"}, /*scene=*/true);
+  const std::string db = dir_.file("pnp.db");
+  ChildProcess import(
+      "import",
+      {PNP_BIN_DIR "/pnp-import", "--db", db, "--hierarchy",
+       PNP_SOURCE_DIR "/tests/data/panda_block", "--robot", "panda", "--object", "block"},
+      dir_.path());
+  ASSERT_TRUE(import.wait(60s).value_or(pnp::integration::ExitStatus{}).ok())
+      << import.diagnostics();
+  ChildProcess inference(
+      "inference", {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db", db},
+      dir_.path());
+  ChildProcess robot_sim(
+      "robot_sim",
+      {PNP_BIN_DIR "/pnp-robot-sim", "--address", "127.0.0.1:0", "--clock", "realtime", "--world",
+       "paper", "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"},
+      dir_.path());
+  const int inference_port = inference.port();
+  ASSERT_GT(inference_port, 0) << inference.diagnostics();
+  const auto drive = [&](const std::string& name, int controller_port) {
+    ChildProcess gateway(name,
+                         {PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
+                          "127.0.0.1:" + std::to_string(controller_port), "--inference",
+                          "127.0.0.1:" + std::to_string(inference_port), "--config",
+                          PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes", "20", "--seed",
+                          "3000", "--json"},
+                         dir_.path());
+    const auto status = gateway.wait(300s);
+    EXPECT_TRUE(status && status->ok()) << gateway.diagnostics();
+    return nlohmann::json::parse(gateway.stdout_text());
+  };
+  const nlohmann::json bridge = drive("gateway_bridge", bridge_->port());
+  const nlohmann::json direct = drive("gateway_robot_sim", robot_sim.port());
+  EXPECT_EQ(bridge["episodes"], 20);
+  EXPECT_EQ(bridge["refused_targets"], 0) << bridge.dump();
+  EXPECT_EQ(bridge["missed_periods"], 0) << bridge.dump();
+  EXPECT_GE(bridge["successes"].get<int>(), direct["successes"].get<int>() - 2)
+      << "through the bridge " << bridge["successes"] << ", on pnp-robot-sim "
+      << direct["successes"];
+  EXPECT_GE(bridge["successes"].get<int>(), 16) << bridge.dump();
 }
 
 }  // namespace

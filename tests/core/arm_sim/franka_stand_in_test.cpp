@@ -18,7 +18,7 @@ TEST(FrankaStandIn, AnEquilibriumAtTheEndEffectorHoldsAndAStepMovesTheGripPointB
   arm.reset(3);
   const FrankaStandInState start = arm.state();
   EXPECT_EQ(start.robot_mode, kFrankaModeMove);
-  arm.set_equilibrium(pose_of(start.base_from_ee));
+  arm.set_equilibrium(pose_of(start.base_from_ee), std::chrono::system_clock::now());
   arm.advance(0.2);
   const Eigen::Vector3d grip0 = arm.arm().state().tcp_base.position_m;
   // O_T_EE is the grip point moved back along the flange and through F_T_EE.
@@ -30,7 +30,7 @@ TEST(FrankaStandIn, AnEquilibriumAtTheEndEffectorHoldsAndAStepMovesTheGripPointB
   // 2 cm down in the end effector's pose is 2 cm down at the grip point.
   geometry::Pose lower = pose_of(start.base_from_ee);
   lower.position_m.z() -= 0.02;
-  arm.set_equilibrium(lower);
+  arm.set_equilibrium(lower, std::chrono::system_clock::now());
   arm.advance(0.5);
   const Eigen::Vector3d grip1 = arm.arm().state().tcp_base.position_m;
   EXPECT_NEAR(grip1.z() - grip0.z(), -0.02, 1e-3);
@@ -43,14 +43,26 @@ TEST(FrankaStandIn, AnEquilibriumFarFromTheHandIsACartesianReflexUntilRecovery) 
   arm.reset(3);
   geometry::Pose far = pose_of(arm.state().base_from_ee);
   far.position_m.x() += 0.3;
-  arm.set_equilibrium(far);
+  arm.set_equilibrium(far, std::chrono::system_clock::now());
   arm.advance(0.01);
   EXPECT_EQ(arm.state().robot_mode, kFrankaModeReflex);
   EXPECT_EQ(arm.state().current_errors, std::vector<std::string>{"cartesian_reflex"});
-  arm.set_equilibrium(pose_of(arm.state().base_from_ee));  // ignored in a reflex
+  arm.set_equilibrium(pose_of(arm.state().base_from_ee),
+                      std::chrono::system_clock::now());  // ignored in a reflex
   EXPECT_TRUE(arm.error_recovery());
   EXPECT_EQ(arm.state().robot_mode, kFrankaModeMove);
   EXPECT_FALSE(arm.error_recovery());  // nothing left to clear
+}
+
+TEST(FrankaStandIn, AnEquilibriumSentBeforeTheSceneWasResetIsIgnored) {
+  FrankaStandIn arm({});
+  const auto before = std::chrono::system_clock::now();
+  arm.reset(3, before + std::chrono::milliseconds(1));
+  geometry::Pose far = pose_of(arm.state().base_from_ee);
+  far.position_m.x() += 0.3;  // where the hand was in the last scene
+  arm.set_equilibrium(far, before);
+  arm.advance(0.01);
+  EXPECT_TRUE(arm.state().current_errors.empty());
 }
 
 }  // namespace
