@@ -73,6 +73,12 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "first episode's scene seed (then seed+1, ...)")
       ->check(pnp::seed_value())
       ->capture_default_str();
+  std::vector<double> goal;
+  app.add_option("--goal", goal,
+                 "a real arm's episode: the goal X,Y,Z (base frame, metres) for the object the "
+                 "controller perceives where the operator placed it; no scene reset, one episode")
+      ->delimiter(',')
+      ->expected(3);
   app.add_option("--name", name, "client name on the lease")->capture_default_str();
   app.add_flag("--dry-run", dry_run, "compute and log targets without sending them");
   app.add_flag("--trace", trace,
@@ -95,6 +101,12 @@ int main(int argc, char** argv) {
   try {
     if (episodes < 1) {
       throw_invalid_argument("--episodes", "a positive integer", std::to_string(episodes));
+    }
+    if (!goal.empty() && episodes != 1) {
+      throw_invalid_argument("--episodes",
+                             "1 with --goal (the operator places the object for "
+                             "each episode)",
+                             std::to_string(episodes));
     }
     const services::FileAddress from_file[] = {
         {"robot_controller", "--controller", &controller_address},
@@ -162,12 +174,14 @@ int main(int argc, char** argv) {
     gateway::GatewayEpisodeRunner runner(config, controller, *policy, log, strict);
     std::vector<gateway::EpisodeReport> reports;
     for (int k = 0; k < episodes && !interrupted.load(); ++k) {
-      reports.push_back(runner.run({.seed = seed + static_cast<std::uint64_t>(k),
-                                    .reset_scene = true,
-                                    .goal_base = std::nullopt,
-                                    .dry_run = dry_run,
-                                    .trace = trace},
-                                   interrupted));
+      reports.push_back(runner.run(
+          {.seed = seed + static_cast<std::uint64_t>(k),
+           .reset_scene = goal.empty(),
+           .goal_base = goal.empty() ? std::nullopt
+                                     : std::optional<Eigen::Vector3d>({goal[0], goal[1], goal[2]}),
+           .dry_run = dry_run,
+           .trace = trace},
+          interrupted));
       episode_metrics.record(reports.back());
       if (gateway::ends_run(reports.back().end)) {
         std::fprintf(stderr, "pnp-robot-gateway: run ended: %s\n", reports.back().reason.c_str());

@@ -344,6 +344,24 @@ TEST_F(GatewayEndToEnd, PicksAndPlacesThroughTheControllerStandIn) {
   }
 }
 
+// A real arm has no scene reset: the operator places the object and gives the goal
+// (pnp-robot-gateway --goal). Such an episode, on the scene a reset put there, plays
+// exactly as the episode with the reset (lockstep: bit for bit).
+TEST_F(GatewayEndToEnd, AnEpisodeWithAGivenGoalAndNoResetPlaysAsTheResetOne) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+  const EpisodeReport with_reset = runner.run(episode(903), not_interrupted_);
+  const auto scene = controller_->reset_scene(903);  // the operator's placing, here
+  EpisodeOptions given = episode(903);
+  given.reset_scene = false;
+  given.goal_base = Eigen::Vector3d(scene.goal().x_m(), scene.goal().y_m(), scene.goal().z_m());
+  const EpisodeReport without = runner.run(given, not_interrupted_);
+  EXPECT_EQ(episode_end_name(without.end), episode_end_name(with_reset.end)) << without.reason;
+  EXPECT_EQ(without.steps, with_reset.steps);
+  EXPECT_EQ(without.decisions, with_reset.decisions);
+}
+
 // The checked-in hierarchy was trained on the mocap hand: the gateway says so once per run
 // (not per episode), and with --strict refuses it before anything moves.
 TEST_F(GatewayEndToEnd, WarnsOnceAboutAMocapTrainedPolicyAndStrictRefusesIt) {
