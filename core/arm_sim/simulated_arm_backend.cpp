@@ -35,7 +35,8 @@ robot::BackendReading reading_of(const ArmState& state) {
   reading.finger_gap_m = state.finger_gap_m;
   reading.joint_positions_rad = state.joint_positions;
   reading.object_base = state.object_base;
-  if (state.mode == ArmMode::kFault) reading.fault = "the simulation became unstable (reset the scene)";
+  if (state.mode == ArmMode::kFault)
+    reading.fault = "the simulation became unstable (reset the scene)";
   return reading;
 }
 

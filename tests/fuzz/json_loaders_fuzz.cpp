@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "robot/controller_limits.h"
 #include "geometry/rigid_transform.h"
+#include "robot/controller_limits.h"
 #include "robot/gateway_config.h"
 #include "security/auth_policy.h"
 #include "tests/fuzz/fuzz_contract.h"

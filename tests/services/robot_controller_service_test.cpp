@@ -1,8 +1,6 @@
 // pnp.robot.v1 over the controller stand-in, in process over loopback with real stubs:
 // the lease, the drive stream's rules, E-stop and resume, scene resets, and refusals.
 
-#include "services/robot_sim/simulated_scene_service.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -10,6 +8,7 @@
 #include "services/common/robot_convert.h"
 #include "services/common/server_runtime.h"
 #include "services/common/time_convert.h"
+#include "services/robot_sim/simulated_scene_service.h"
 
 namespace pnp::services {
 namespace {
