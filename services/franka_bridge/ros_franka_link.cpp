@@ -41,8 +41,12 @@ struct RosFrankaLink::Impl {
         grasp(topics.gripper + "/grasp", false),
         recovery(topics.error_recovery, false) {}
 
+  // Once per kind of problem and topic; at most kMaxRefusalKinds kinds are remembered (a
+  // publisher inventing frame names cannot grow the set), later new ones are not logged.
   void refuse_once(const std::string& topic, const std::string& why) {
+    static constexpr std::size_t kMaxRefusalKinds = 64;
     std::lock_guard<std::mutex> lock(refused_mutex);
+    if (refused.size() >= kMaxRefusalKinds) return;
     if (refused.insert(topic + why).second && inputs.on_refused) inputs.on_refused(topic, why);
   }
 

@@ -110,8 +110,10 @@ RosFrankaSimLink::RosFrankaSimLink(const FrankaSimTopics& topics, FrankaSimInput
       },
       ros::VoidConstPtr(), no_delay);
   i.inject_reflex = i.node.subscribe<std_msgs::String>(
-      topics.control + "/inject_reflex", 10,
-      [&i](const std_msgs::StringConstPtr& msg) { i.inputs.on_inject_reflex(msg->data); });
+      topics.control + "/inject_reflex", 10, [&i](const std_msgs::StringConstPtr& msg) {
+        franka_msgs::Errors known;  // only franka_msgs' own error names
+        if (set_error_flag(known, msg->data)) i.inputs.on_inject_reflex(msg->data);
+      });
   i.reset_scene = i.node.subscribe<std_msgs::UInt64>(
       topics.control + "/reset_scene", 10,
       [&i](const std_msgs::UInt64ConstPtr& msg) { i.inputs.on_reset_scene(msg->data); });

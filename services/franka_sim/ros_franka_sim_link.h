@@ -8,7 +8,8 @@
 // geometry_msgs/PoseStamped. Subscribes the impedance controller's equilibrium pose.
 // Serves franka_gripper's move and grasp and franka_control's error_recovery actions.
 // For tests only: std_msgs/String on <control>/inject_reflex puts the arm into a reflex
-// with that error, std_msgs/UInt64 on <control>/reset_scene starts that seed's episode.
+// with that error (one of franka_msgs/Errors' names; others are ignored), std_msgs/UInt64 on
+// <control>/reset_scene starts that seed's episode.
 
 #include <array>
 #include <chrono>
