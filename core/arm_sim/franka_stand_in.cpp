@@ -10,18 +10,6 @@
 namespace pnp::arm_sim {
 namespace {
 
-Eigen::Matrix4d matrix_of(const geometry::Pose& pose) {
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.topLeftCorner<3, 3>() = pose.orientation.normalized().toRotationMatrix();
-  m.topRightCorner<3, 1>() = pose.position_m;
-  return m;
-}
-
-geometry::Pose pose_of(const Eigen::Matrix4d& m) {
-  return {m.topRightCorner<3, 1>(),
-          Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized()};
-}
-
 Eigen::Matrix4d grip_from_flange() {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   m(2, 3) = -sim::kGripPointFromFlange_m;
@@ -54,9 +42,10 @@ void FrankaStandIn::set_equilibrium(const geometry::Pose& ee_base,
     return;
   }
   // grip = ee * ee_from_flange * flange_from_grip
-  const Eigen::Matrix4d grip = matrix_of(ee_base) * options_.flange_from_ee.inverse().matrix() *
+  const Eigen::Matrix4d grip = geometry::to_matrix(ee_base) *
+                               options_.flange_from_ee.inverse().matrix() *
                                grip_from_flange().inverse();
-  pending_equilibrium_ = pose_of(grip);
+  pending_equilibrium_ = geometry::pose_from_matrix(grip);
 }
 
 bool FrankaStandIn::gripper_move(double width_m) {
@@ -136,8 +125,8 @@ FrankaStandInState FrankaStandIn::state() const {
   out.time_s = s.sim_time_s;
   out.flange_from_ee = options_.flange_from_ee.matrix();
   // ee = grip * grip_from_ee
-  out.base_from_ee = matrix_of(s.tcp_base) * ee_from_grip.inverse();
-  out.base_from_ee_desired = matrix_of(s.target_base) * ee_from_grip.inverse();
+  out.base_from_ee = geometry::to_matrix(s.tcp_base) * ee_from_grip.inverse();
+  out.base_from_ee_desired = geometry::to_matrix(s.target_base) * ee_from_grip.inverse();
   out.q = s.joint_positions;
   out.dq = s.joint_velocities;
   out.tau = s.joint_torques;

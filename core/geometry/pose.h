@@ -23,4 +23,17 @@ inline double rotation_angle_rad(const Eigen::Quaterniond& a, const Eigen::Quate
   return a.normalized().angularDistance(b.normalized());
 }
 
+// The homogeneous 4x4 matrix of `pose` (its orientation normalised), and back. No checks:
+// a matrix from outside goes through RigidTransform::from_matrix first.
+inline Eigen::Matrix4d to_matrix(const Pose& pose) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = pose.orientation.normalized().toRotationMatrix();
+  m.topRightCorner<3, 1>() = pose.position_m;
+  return m;
+}
+inline Pose pose_from_matrix(const Eigen::Matrix4d& m) {
+  return {m.topRightCorner<3, 1>(),
+          Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized()};
+}
+
 }  // namespace pnp::geometry

@@ -18,14 +18,11 @@ geometry::RigidTransform transform_of(const std::array<double, 16>& column_major
 }
 
 geometry::RigidTransform transform_of(const geometry::Pose& pose) {
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.topLeftCorner<3, 3>() = pose.orientation.normalized().toRotationMatrix();
-  m.topRightCorner<3, 1>() = pose.position_m;
-  return geometry::RigidTransform::from_matrix(m, "pose");
+  return geometry::RigidTransform::from_matrix(geometry::to_matrix(pose), "pose");
 }
 
 geometry::Pose pose_of(const geometry::RigidTransform& t) {
-  return {t.translation_m(), Eigen::Quaterniond(t.rotation()).normalized()};
+  return geometry::pose_from_matrix(t.matrix());
 }
 
 void require_positive(double value, const char* field) {

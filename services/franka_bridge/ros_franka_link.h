@@ -15,6 +15,7 @@
 #include <string>
 
 #include "robot/franka_backend.h"
+#include "services/franka_ros/franka_ros_names.h"
 
 namespace pnp::services {
 
@@ -22,14 +23,14 @@ namespace pnp::services {
 // differ). The defaults are franka_ros's own with franka_control.launch and
 // cartesian_impedance_example_controller.launch.
 struct FrankaTopics {
-  std::string state = "/franka_state_controller/franka_states";
-  std::string finger_joints = "/franka_gripper/joint_states";
-  std::string equilibrium_pose = "/cartesian_impedance_example_controller/equilibrium_pose";
-  std::string object_pose = "/pnp/object_pose";
-  std::string gripper = "/franka_gripper";  // its move and grasp actions
-  std::string error_recovery = "/franka_control/error_recovery";
+  std::string state = franka_ros_names::kState;
+  std::string finger_joints = franka_ros_names::kFingerJoints;
+  std::string equilibrium_pose = franka_ros_names::kEquilibriumPose;
+  std::string object_pose = franka_ros_names::kObjectPose;
+  std::string gripper = franka_ros_names::kGripper;  // its move and grasp actions
+  std::string error_recovery = franka_ros_names::kErrorRecovery;
   // The frame every pose in and out is in: the arm's base.
-  std::string base_frame = "panda_link0";
+  std::string base_frame = franka_ros_names::kBaseFrame;
   // The fingers' joint names in finger_joints; the width is their sum.
   std::string finger_joint_1 = "panda_finger_joint1";
   std::string finger_joint_2 = "panda_finger_joint2";

@@ -20,19 +20,20 @@
 #include <vector>
 
 #include "geometry/pose.h"
+#include "services/franka_ros/franka_ros_names.h"
 
 namespace pnp::services {
 
 struct FrankaSimTopics {
-  std::string state = "/franka_state_controller/franka_states";
-  std::string arm_joints = "/franka_state_controller/joint_states";
-  std::string finger_joints = "/franka_gripper/joint_states";
-  std::string equilibrium_pose = "/cartesian_impedance_example_controller/equilibrium_pose";
-  std::string object_pose = "/pnp/object_pose";
-  std::string gripper = "/franka_gripper";
-  std::string error_recovery = "/franka_control/error_recovery";
+  std::string state = franka_ros_names::kState;
+  std::string arm_joints = franka_ros_names::kArmJoints;
+  std::string finger_joints = franka_ros_names::kFingerJoints;
+  std::string equilibrium_pose = franka_ros_names::kEquilibriumPose;
+  std::string object_pose = franka_ros_names::kObjectPose;
+  std::string gripper = franka_ros_names::kGripper;
+  std::string error_recovery = franka_ros_names::kErrorRecovery;
   std::string control = "/pnp_franka_sim";
-  std::string base_frame = "panda_link0";
+  std::string base_frame = franka_ros_names::kBaseFrame;
 };
 
 // One state as FrankaState carries it (matrices column-major).
