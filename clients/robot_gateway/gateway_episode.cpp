@@ -535,9 +535,17 @@ bool GatewayEpisodeRunner::send_and_take_feedback(Episode& episode,
     case rv1::CONTROLLER_STATUS_OK:
       episode.last_accepted = planned;
       return true;
-    case rv1::CONTROLLER_STATUS_STOPPED:
-      episode.end(EpisodeEnd::kStopped, "the controller refused a target: the arm is stopped");
+    case rv1::CONTROLLER_STATUS_STOPPED: {
+      // Why, as the controller reports it (what an operator acknowledges), if it says.
+      std::string why = "the controller refused a target: the arm is stopped";
+      try {
+        if (const auto stopped = controller_.state(deadman))
+          why += " (" + stop_description(*stopped) + ")";
+      } catch (const std::exception&) {  // the stop is reported without its reason
+      }
+      episode.end(EpisodeEnd::kStopped, std::move(why));
       return false;
+    }
     case rv1::CONTROLLER_STATUS_LEASE_LOST:
       episode.end(EpisodeEnd::kLeaseLost, "the controller refused a target: lease lost");
       return false;

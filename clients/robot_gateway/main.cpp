@@ -2,10 +2,12 @@
 // controller's state, asks the inference service for the next action, changes the target
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
-//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json] [--strict]
+//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json] [--strict] [--await-operator S]
 //   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
-// clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once.
+// clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once. Any
+// other emergency stop (a reflex, a stalled arm, anyone's E-stop) ends the run too, unless
+// --await-operator gives the operator time to clear it: then the run goes on.
 
 #include <grpcpp/grpcpp.h>
 #include <unistd.h>
@@ -24,6 +26,7 @@
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_metrics.h"
 #include "clients/robot_gateway/gateway_summary.h"
+#include "clients/robot_gateway/operator_wait.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
 #include "services/common/address.h"
@@ -58,6 +61,7 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1000;
   bool dry_run = false, trace = false, json = false, quiet = false, public_metrics = false;
   bool strict = false;
+  double await_operator_s = 0;
   std::string metrics_address;
   app.add_option("--controller", controller_address, "robot controller host:port")
       ->envname("PNP_ROBOT_CONTROLLER_ADDRESS")
@@ -90,6 +94,12 @@ int main(int argc, char** argv) {
   app.add_flag("--strict", strict,
                "refuse a served policy trained for another arm (another robot, or the mocap "
                "hand instead of the arm's controller) instead of warning");
+  app.add_option("--await-operator", await_operator_s,
+                 "after an emergency stop, wait up to this many seconds for an operator to clear "
+                 "it (pnpctl robot resume --ack REASON), then go on with the next episode (0: the "
+                 "run ends)")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
   app.add_option("--metrics-address", metrics_address,
                  "host:port for Prometheus /metrics (port 0 picks one, logged as metrics_port; "
                  "empty: off)");
@@ -183,7 +193,13 @@ int main(int argc, char** argv) {
            .trace = trace},
           interrupted));
       episode_metrics.record(reports.back());
-      if (gateway::ends_run(reports.back().end)) {
+      const bool cleared =
+          reports.back().end == gateway::EpisodeEnd::kStopped && await_operator_s > 0 &&
+          k + 1 < episodes &&
+          gateway::wait_for_operator(
+              controller, std::chrono::milliseconds(std::lround(await_operator_s * 1000)),
+              interrupted, log) == gateway::OperatorWait::kCleared;
+      if (gateway::ends_run(reports.back().end) && !cleared) {
         std::fprintf(stderr, "pnp-robot-gateway: run ended: %s\n", reports.back().reason.c_str());
         break;
       }

@@ -104,6 +104,10 @@ class FrankaBackend final : public ArmBackend {
   void rest_at_measured();
   // When the latest readable state arrived (nullopt: none yet).
   std::optional<SteadyTime> last_state_received() const;
+  // When the tracker's latest pose arrived (nullopt: none yet).
+  std::optional<SteadyTime> last_object_received() const {
+    return object_ ? std::optional(object_->received) : std::nullopt;
+  }
 
   BackendReading reading() const override;
   IntakeOutcome command(const ArmTarget& target) override;

@@ -49,14 +49,19 @@ class FrankaController : private detail::FrankaBackendHolder, public ArmControll
   // A simulated arm's scene reset, done by `reset` (which moves the arm elsewhere): the
   // lease is checked first (FAILED_PRECONDITION), then, once a state measured after the
   // reset has arrived (UNAVAILABLE if none within `state_wait_s`), the bridge holds where
-  // the arm now is. Returns what `reset` returned and the controller's report.
+  // the arm now is. With a tracker, its first pose after the reset is waited for too
+  // (within the same time; after that the object is reported as the tracker left it, and
+  // a stale pose as none), so nobody reads the scene before it as the one after it.
+  // Returns what `reset` returned and the controller's report.
   template <typename Reset>
   auto reset_scene(const std::string& lease_id, Reset&& reset, double state_wait_s = 1.0) {
+    bool tracked = false;
     {
       const CallerLock lock(*this);
       require_lease(lease_id, LeaseBook::Clock::now());
       require_not_stopped("resetting the scene");
       backend.pause_streaming();
+      tracked = backend.last_object_received().has_value();
     }
     auto result = [&] {
       try {
@@ -74,7 +79,10 @@ class FrankaController : private detail::FrankaBackendHolder, public ArmControll
       {
         const CallerLock lock(*this);
         const auto received = backend.last_state_received();
-        if (received && *received > done) {
+        const auto seen = backend.last_object_received();
+        const bool object_fresh = !tracked || (seen && *seen > done);
+        if (received && *received > done &&
+            (object_fresh || std::chrono::steady_clock::now() > deadline)) {
           backend.rest_at_measured();
           publish_locked();
           return std::pair{std::move(result), report_locked(ControllerStatus::kOk, {})};

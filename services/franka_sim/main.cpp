@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <mutex>
@@ -46,6 +47,20 @@ FrankaSimReport report_of(const pnp::arm_sim::FrankaStandInState& s) {
   r.object_base = s.object_base;
   return r;
 }
+
+// A topic a test silenced until a steady-clock time (std::atomic: set from ROS's threads).
+class Silence {
+ public:
+  void for_seconds(double s) {
+    until_.store(
+        Clock::now().time_since_epoch().count() +
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)).count());
+  }
+  bool now() const { return Clock::now().time_since_epoch().count() < until_.load(); }
+
+ private:
+  std::atomic<Clock::rep> until_{0};
+};
 
 // Runs `work` every `period` on the steady clock until stopped (descheduled: it catches
 // up at most 20 periods, then restarts the schedule).
@@ -130,12 +145,22 @@ int main(int argc, char** argv) {
       locked([&] { arm.reset(s); });
       log_event("franka_sim", "scene_reset", {{"seed", s}});
     };
+    Silence state_silence, tracker_silence;
+    inputs.on_stall_state = [&](double s) {
+      state_silence.for_seconds(s);
+      log_event("franka_sim", "state_stalled", {{"seconds", s}});
+    };
+    inputs.on_stall_tracker = [&](double s) {
+      tracker_silence.for_seconds(s);
+      log_event("franka_sim", "tracker_stalled", {{"seconds", s}});
+    };
     RosFrankaSimLink link(topics, inputs);
     std::jthread physics([&](const std::stop_token& stop) {
       every(std::chrono::milliseconds(1), stop, [&] { locked([&] { arm.advance(0.001); }); });
     });
     std::jthread state([&](const std::stop_token& stop) {
       every(period_of(state_hz), stop, [&] {
+        if (state_silence.now()) return;
         const auto s = locked([&] { return arm.state(); });
         link.publish_state(report_of(s));
         link.publish_fingers(s.finger_gap_m);
@@ -143,8 +168,10 @@ int main(int argc, char** argv) {
     });
     std::jthread tracker([&](const std::stop_token& stop) {
       if (tracker_hz <= 0) return;
-      every(period_of(tracker_hz), stop,
-            [&] { link.publish_object(locked([&] { return arm.state().object_base; })); });
+      every(period_of(tracker_hz), stop, [&] {
+        if (!tracker_silence.now())
+          link.publish_object(locked([&] { return arm.state().object_base; }));
+      });
     });
     const nlohmann::json fields{
         {"object", object}, {"seed", seed}, {"state_hz", state_hz}, {"tracker_hz", tracker_hz}};

@@ -5,10 +5,12 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
+#include <std_msgs/Float64.h>
 #include <std_msgs/String.h>
 #include <std_msgs/UInt64.h>
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "franka_gripper/GraspAction.h"
@@ -83,7 +85,7 @@ struct RosFrankaSimLink::Impl {
   actionlib::SimpleActionServer<franka_gripper::GraspAction> grasp;
   actionlib::SimpleActionServer<franka_msgs::ErrorRecoveryAction> recovery;
   ros::Publisher state, arm_joints, finger_joints, object;
-  ros::Subscriber equilibrium, inject_reflex, reset_scene;
+  ros::Subscriber equilibrium, inject_reflex, reset_scene, stall_state, stall_tracker;
   std::uint32_t sequence = 0;
   ros::AsyncSpinner spinner{2};
 };
@@ -117,6 +119,15 @@ RosFrankaSimLink::RosFrankaSimLink(const FrankaSimTopics& topics, FrankaSimInput
   i.reset_scene = i.node.subscribe<std_msgs::UInt64>(
       topics.control + "/reset_scene", 10,
       [&i](const std_msgs::UInt64ConstPtr& msg) { i.inputs.on_reset_scene(msg->data); });
+  const auto stall = [&i](const std::string& name, std::function<void(double)>& on_stall) {
+    return i.node.subscribe<std_msgs::Float64>(
+        i.topics.control + "/" + name, 10, [&on_stall](const std_msgs::Float64ConstPtr& msg) {
+          if (std::isfinite(msg->data) && msg->data >= 0 && msg->data <= kMaxStall_s)
+            on_stall(msg->data);
+        });
+  };
+  i.stall_state = stall("stall_state", i.inputs.on_stall_state);
+  i.stall_tracker = stall("stall_tracker", i.inputs.on_stall_tracker);
   i.move.start();
   i.grasp.start();
   i.recovery.start();
@@ -132,6 +143,8 @@ void RosFrankaSimLink::stop_callbacks() {
   impl_->equilibrium.shutdown();
   impl_->inject_reflex.shutdown();
   impl_->reset_scene.shutdown();
+  impl_->stall_state.shutdown();
+  impl_->stall_tracker.shutdown();
   impl_->move.shutdown();
   impl_->grasp.shutdown();
   impl_->recovery.shutdown();

@@ -9,7 +9,9 @@
 // Serves franka_gripper's move and grasp and franka_control's error_recovery actions.
 // For tests only: std_msgs/String on <control>/inject_reflex puts the arm into a reflex
 // with that error (one of franka_msgs/Errors' names; others are ignored), std_msgs/UInt64 on
-// <control>/reset_scene starts that seed's episode.
+// <control>/reset_scene starts that seed's episode, std_msgs/Float64 on
+// <control>/stall_state or <control>/stall_tracker silences that topic for so many
+// seconds (0 to kMaxStall_s; others are ignored) while the arm goes on.
 
 #include <array>
 #include <chrono>
@@ -23,6 +25,9 @@
 #include "services/franka_ros/franka_ros_names.h"
 
 namespace pnp::services {
+
+// The longest silence a test control may ask for.
+inline constexpr double kMaxStall_s = 60;
 
 struct FrankaSimTopics {
   std::string state = franka_ros_names::kState;
@@ -56,6 +61,8 @@ struct FrankaSimInputs {
   std::function<bool()> on_error_recovery;
   std::function<void(const std::string& error_name)> on_inject_reflex;
   std::function<void(std::uint64_t seed)> on_reset_scene;
+  std::function<void(double seconds)> on_stall_state;
+  std::function<void(double seconds)> on_stall_tracker;
 };
 
 class RosFrankaSimLink {

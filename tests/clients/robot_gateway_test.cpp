@@ -16,6 +16,7 @@
 #include "arm_sim/arm_actuated_env.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
+#include "clients/robot_gateway/operator_wait.h"
 #include "common/error.h"
 #include "services/common/convert.h"
 #include "services/common/server_runtime.h"
@@ -560,7 +561,10 @@ TEST_F(GatewayEndToEnd, AHoldTheControllerRefusesEndsTheEpisodeThere) {
       GatewayEpisodeRunner(config, *controller_, *policy_stub_, log).run(traced, not_interrupted_);
   ASSERT_GE(wait_step, 0) << "no cycle waited for the arm";
   EXPECT_EQ(report.end, EpisodeEnd::kStopped);
-  EXPECT_EQ(report.reason, "the controller refused a target: the arm is stopped");
+  // With the stop's reason as the controller reports it: what an operator acknowledges.
+  EXPECT_EQ(report.reason,
+            "the controller refused a target: the arm is stopped (STOP_KIND_EMERGENCY: a person "
+            "walked into the cell)");
   EXPECT_EQ(report.steps, wait_step);  // the failed cycle is the last
   EXPECT_EQ(report.arrival_waits, 1);
 }
@@ -894,6 +898,40 @@ TEST_F(GatewayEndToEnd, AnEmergencyStopEndsTheRunUntilAnOperatorClearsIt) {
   const EpisodeReport after = runner.run(episode(908), not_interrupted_);
   EXPECT_TRUE(after.end == EpisodeEnd::kSuccess || after.end == EpisodeEnd::kStepCap)
       << episode_end_name(after.end) << ": " << after.reason;
+}
+
+// --await-operator: the gateway only watches; the operator's acknowledgement clears the
+// stop, and the run's next episode drives again.
+TEST_F(GatewayEndToEnd, AfterAnEmergencyStopTheRunWaitsForTheOperatorAndGoesOn) {
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  const robot::GatewayConfig config = panda_config();
+  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
+  arm_->stop("reflex: cartesian_reflex", robot::StopKind::kEmergency);
+  EXPECT_EQ(runner.run(episode(912), not_interrupted_).end, EpisodeEnd::kStopped);
+
+  // Nobody clears it: the wait ends at its limit, and the stop stands.
+  EXPECT_EQ(
+      wait_for_operator(*controller_, std::chrono::milliseconds(300), not_interrupted_, recorder()),
+      OperatorWait::kTimedOut);
+  EXPECT_EQ(count("awaiting_operator"), 1);
+  EXPECT_EQ(arm_->state().stop_kind, robot::StopKind::kEmergency);
+  {  // Ctrl-C ends the wait.
+    const std::atomic<bool> interrupted{true};
+    EXPECT_EQ(wait_for_operator(*controller_, std::chrono::seconds(10), interrupted, recorder()),
+              OperatorWait::kInterrupted);
+  }
+  // The operator acknowledges the reason while the gateway waits: the run goes on.
+  std::jthread operator_clears([this] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    arm_->resume({"", "reflex: cartesian_reflex", "ops"});
+  });
+  EXPECT_EQ(wait_for_operator(*controller_, std::chrono::seconds(10), not_interrupted_, recorder()),
+            OperatorWait::kCleared);
+  EXPECT_EQ(count("operator_cleared"), 1);
+  const EpisodeReport after = runner.run(episode(912), not_interrupted_);
+  EXPECT_TRUE(after.end == EpisodeEnd::kSuccess || after.end == EpisodeEnd::kStepCap)
+      << episode_end_name(after.end) << ": " << after.reason;
+  EXPECT_GT(after.steps, 0);
 }
 
 // Between episodes nothing renews the lease: one that lapsed while the gateway waited (for

@@ -6,12 +6,14 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <std_msgs/Float64.h>
 #include <std_msgs/String.h>
 
 #include <chrono>
 #include <csignal>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -35,6 +37,28 @@ std::vector<std::pair<std::string, std::string>> ros_env(const TempDir& dir,
           {"ROS_HOSTNAME", "127.0.0.1"},
           {"ROS_HOME", dir.path().string()},
           {"ROS_LOG_DIR", (dir.path() / "ros_log").string()}};
+}
+
+// The gateway's log events (JSON lines on stderr) named `event`, in order.
+std::vector<nlohmann::json> events(const ChildProcess& gateway, const std::string& event) {
+  std::vector<nlohmann::json> found;
+  std::istringstream lines(gateway.stderr_text());
+  for (std::string line; std::getline(lines, line);) {
+    const nlohmann::json parsed = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
+    if (!parsed.is_object()) continue;
+    const auto name = parsed.find("event");
+    if (name != parsed.end() && *name == event) found.push_back(parsed);
+  }
+  return found;
+}
+
+template <typename Message>
+void publish_once(const std::string& topic, const Message& message) {
+  ros::NodeHandle node;
+  ros::Publisher pub = node.advertise<Message>(topic, 1, true);
+  ASSERT_TRUE(wait_until([&] { return pub.getNumSubscribers() > 0; }, 10s)) << topic;
+  pub.publish(message);
+  std::this_thread::sleep_for(100ms);  // latched: delivered before the publisher goes
 }
 
 class FrankaChain : public ::testing::Test {
@@ -68,13 +92,14 @@ class FrankaChain : public ::testing::Test {
     std::vector<std::string> sim{PNP_BIN_DIR "/pnp-franka-sim"};
     sim.insert(sim.end(), sim_flags.begin(), sim_flags.end());
     if (scene) sim.insert(sim.end(), {"--address", "127.0.0.1:0"});
+    sim_args_ = sim;
     sim_.emplace("franka_sim", sim, dir_.path(), ros_env(dir_, master_uri_));
     std::vector<std::string> bridge{PNP_BIN_DIR "/pnp-franka-bridge", "--address", "127.0.0.1:0",
                                     "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"};
     if (scene) {
-      const int scene_port = sim_->port();
-      ASSERT_GT(scene_port, 0) << sim_->diagnostics();
-      bridge.insert(bridge.end(), {"--stand-in-scene", "127.0.0.1:" + std::to_string(scene_port)});
+      scene_port_ = sim_->port();
+      ASSERT_GT(scene_port_, 0) << sim_->diagnostics();
+      bridge.insert(bridge.end(), {"--stand-in-scene", "127.0.0.1:" + std::to_string(scene_port_)});
     }
     bridge_.emplace("franka_bridge", bridge, dir_.path(), ros_env(dir_, master_uri_));
     const int port = bridge_->port();
@@ -145,6 +170,50 @@ class FrankaChain : public ::testing::Test {
     }
   };
 
+  // A stand-in killed with SIGKILL comes back as a new process (on the same scene port).
+  void restart_stand_in() {
+    sim_->kill();
+    sim_->wait(10s);
+    std::vector<std::string> args = sim_args_;
+    if (scene_port_ > 0) args.back() = "127.0.0.1:" + std::to_string(scene_port_);
+    sim_.reset();
+    sim_.emplace("franka_sim_restarted", args, dir_.path(), ros_env(dir_, master_uri_));
+  }
+
+  // The served policy: the checked-in Panda hierarchy (trained in the paper world).
+  int start_inference() {
+    const std::string db = dir_.file("pnp.db");
+    ChildProcess import(
+        "import",
+        {PNP_BIN_DIR "/pnp-import", "--db", db, "--hierarchy",
+         PNP_SOURCE_DIR "/tests/data/panda_block", "--robot", "panda", "--object", "block"},
+        dir_.path());
+    EXPECT_TRUE(import.wait(60s).value_or(pnp::integration::ExitStatus{}).ok())
+        << import.diagnostics();
+    inference_.emplace("inference",
+                       std::vector<std::string>{PNP_BIN_DIR "/pnp-inference-server", "--address",
+                                                "127.0.0.1:0", "--db", db},
+                       dir_.path());
+    const int port = inference_->port();
+    EXPECT_GT(port, 0) << inference_->diagnostics();
+    return port;
+  }
+
+  std::vector<std::string> gateway_args(int controller_port, int inference_port, int episodes) {
+    return {PNP_BIN_DIR "/pnp-robot-gateway",
+            "--controller",
+            "127.0.0.1:" + std::to_string(controller_port),
+            "--inference",
+            "127.0.0.1:" + std::to_string(inference_port),
+            "--config",
+            PNP_SOURCE_DIR "/deploy/robot/gateway.json",
+            "--episodes",
+            std::to_string(episodes),
+            "--seed",
+            "3000",
+            "--json"};
+  }
+
   void inject_reflex(const std::string& error) {
     ros::NodeHandle node;
     ros::Publisher pub = node.advertise<std_msgs::String>("/pnp_franka_sim/inject_reflex", 1, true);
@@ -158,7 +227,9 @@ class FrankaChain : public ::testing::Test {
 
   TempDir dir_{"franka_chain"};
   std::string master_uri_;
-  std::optional<ChildProcess> master_, sim_, bridge_;
+  std::optional<ChildProcess> master_, sim_, bridge_, inference_;
+  std::vector<std::string> sim_args_;
+  int scene_port_ = 0;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<rv1::RobotControllerService::Stub> stub_;
 };
@@ -252,32 +323,14 @@ TEST_F(FrankaChain, TheTrackersObjectIsReported) {
 // so their episodes differ by timing; the bridge must not cost more than two episodes.
 TEST_F(FrankaChain, TheGatewayDrivesTheBridgeAsItDrivesTheSimulatedController) {
   start_chain(std::vector<std::string>{"--world", "paper"}, /*scene=*/true);
-  const std::string db = dir_.file("pnp.db");
-  ChildProcess import(
-      "import",
-      {PNP_BIN_DIR "/pnp-import", "--db", db, "--hierarchy",
-       PNP_SOURCE_DIR "/tests/data/panda_block", "--robot", "panda", "--object", "block"},
-      dir_.path());
-  ASSERT_TRUE(import.wait(60s).value_or(pnp::integration::ExitStatus{}).ok())
-      << import.diagnostics();
-  ChildProcess inference(
-      "inference", {PNP_BIN_DIR "/pnp-inference-server", "--address", "127.0.0.1:0", "--db", db},
-      dir_.path());
+  const int inference_port = start_inference();
   ChildProcess robot_sim(
       "robot_sim",
       {PNP_BIN_DIR "/pnp-robot-sim", "--address", "127.0.0.1:0", "--clock", "realtime", "--world",
        "paper", "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"},
       dir_.path());
-  const int inference_port = inference.port();
-  ASSERT_GT(inference_port, 0) << inference.diagnostics();
   const auto drive = [&](const std::string& name, int controller_port) {
-    ChildProcess gateway(name,
-                         {PNP_BIN_DIR "/pnp-robot-gateway", "--controller",
-                          "127.0.0.1:" + std::to_string(controller_port), "--inference",
-                          "127.0.0.1:" + std::to_string(inference_port), "--config",
-                          PNP_SOURCE_DIR "/deploy/robot/gateway.json", "--episodes", "20", "--seed",
-                          "3000", "--json"},
-                         dir_.path());
+    ChildProcess gateway(name, gateway_args(controller_port, inference_port, 20), dir_.path());
     const auto status = gateway.wait(300s);
     EXPECT_TRUE(status && status->ok()) << gateway.diagnostics();
     return nlohmann::json::parse(gateway.stdout_text());
@@ -291,6 +344,151 @@ TEST_F(FrankaChain, TheGatewayDrivesTheBridgeAsItDrivesTheSimulatedController) {
       << "through the bridge " << bridge["successes"] << ", on pnp-robot-sim "
       << direct["successes"];
   EXPECT_GE(bridge["successes"].get<int>(), 16) << bridge.dump();
+}
+
+// Every fault a real arm meets, each in its own episode of one gateway run through the
+// bridge (--await-operator): each ends that episode with the arm held, and the run goes
+// on to its last episode. The test is the operator: it clears each emergency stop by
+// repeating its reason, as `pnpctl robot resume --ack REASON` does.
+TEST_F(FrankaChain, EachFaultEndsItsEpisodeHeldAndTheRunGoesOn) {
+  start_chain(std::vector<std::string>{"--world", "paper"}, /*scene=*/true);
+  const int inference_port = start_inference();
+  constexpr int kEpisodes = 10;
+  constexpr double kMaxStall_s = 60;  // the stand-in's longest
+  std::vector<std::string> args = gateway_args(bridge_->port(), inference_port, kEpisodes);
+  args.insert(args.end(), {"--await-operator", "60"});
+  ChildProcess gateway("gateway_faults", args, dir_.path());
+
+  // Waits for an episode after `after` to be under way (still running 0.4 s after its
+  // start: the arm is on its way), then `fault`; returns the seed it hit.
+  const auto ended = [&](std::uint64_t seed) {
+    for (const auto& e : events(gateway, "episode_end"))
+      if (e["seed"] == seed) return true;
+    return false;
+  };
+  std::uint64_t after = 0;
+  const auto during_next_episode = [&](const std::function<void()>& fault) {
+    std::uint64_t seed = 0;
+    EXPECT_TRUE(wait_until(
+        [&] {
+          const auto starts = events(gateway, "episode_start");
+          if (starts.empty() || starts.back()["seed"].get<std::uint64_t>() <= after) return false;
+          seed = starts.back()["seed"].get<std::uint64_t>();
+          std::this_thread::sleep_for(400ms);
+          return !ended(seed);
+        },
+        60s))
+        << gateway.diagnostics();
+    fault();
+    after = seed;
+    return seed;
+  };
+  // The episode `seed` ended as `end` with the arm left `arm_left`, its reason naming `why`.
+  const auto expect_ended = [&](std::uint64_t seed, const std::string& end,
+                                const std::string& arm_left, const std::string& why) {
+    nlohmann::json report;
+    ASSERT_TRUE(wait_until(
+        [&] {
+          for (const auto& e : events(gateway, "episode_end"))
+            if (e["seed"] == seed) report = e;
+          return !report.is_null();
+        },
+        60s))
+        << gateway.diagnostics();
+    if (end.empty()) {  // played to its end
+      EXPECT_TRUE(report["end"] == "success" || report["end"] == "step_cap") << report.dump();
+    } else {
+      EXPECT_EQ(report["end"], end) << report.dump();
+    }
+    EXPECT_EQ(report["arm_left"], arm_left) << report.dump();
+    EXPECT_NE(report["reason"].get<std::string>().find(why), std::string::npos) << report.dump();
+    after = std::max(after, seed);
+  };
+  // The operator clears the emergency stop once the gateway waits for it (retried while a
+  // restarted arm's error recovery is not yet served).
+  std::size_t cleared = 0;
+  const auto operator_clears = [&] {
+    ASSERT_TRUE(
+        wait_until([&] { return events(gateway, "awaiting_operator").size() > cleared; }, 60s))
+        << gateway.diagnostics();
+    ASSERT_TRUE(wait_until(
+        [&] {
+          const rv1::GetStateResponse now = state();
+          if (now.stop_kind() != rv1::STOP_KIND_EMERGENCY) return true;
+          grpc::ClientContext context;
+          rv1::ResumeRequest request;
+          request.set_operator_name("operator");
+          request.set_acknowledged_reason(now.stop_reason());
+          rv1::ResumeResponse response;
+          stub_->Resume(&context, request, &response);
+          return false;
+        },
+        60s, 500ms))
+        << state().DebugString() << bridge_->diagnostics();
+    ASSERT_TRUE(
+        wait_until([&] { return events(gateway, "operator_cleared").size() > cleared; }, 10s))
+        << gateway.diagnostics();
+    ++cleared;
+  };
+
+  const std::uint64_t reflex = during_next_episode([&] {
+    std_msgs::String error;
+    error.data = "cartesian_reflex";
+    publish_once("/pnp_franka_sim/inject_reflex", error);
+  });
+  expect_ended(reflex, "stopped", "emergency_stop", "cartesian_reflex");
+  operator_clears();
+
+  const std::uint64_t stalled = during_next_episode([&] {
+    std_msgs::Float64 seconds;
+    seconds.data = 1.0;
+    publish_once("/pnp_franka_sim/stall_state", seconds);
+  });
+  expect_ended(stalled, "stopped", "emergency_stop", "stalled");
+  std::this_thread::sleep_for(1s);  // the state flows again
+  operator_clears();
+
+  const std::uint64_t killed = during_next_episode([&] { restart_stand_in(); });
+  expect_ended(killed, "stopped", "emergency_stop", "stalled");
+  operator_clears();
+
+  const std::uint64_t stopped = during_next_episode([&] {
+    grpc::ClientContext context;
+    rv1::StopRequest request;
+    request.set_reason("a person stepped into the cell");
+    request.set_kind(rv1::STOP_KIND_EMERGENCY);
+    rv1::StopResponse response;
+    EXPECT_TRUE(stub_->Stop(&context, request, &response).ok());
+  });
+  expect_ended(stopped, "stopped", "emergency_stop", "a person stepped into the cell");
+  operator_clears();
+
+  // After every emergency stop, the next episode plays to its end.
+  expect_ended(stopped + 1, "", "tracking", "");
+
+  // Last, a tracker that goes silent: the object's pose goes stale mid-episode, and is
+  // missing at each later episode's start, which ends before the arm moves. Each ends
+  // with a protective stop (the next episode clears it as the lease holder), and the run
+  // goes on to its last episode.
+  std_msgs::Float64 seconds;
+  seconds.data = kMaxStall_s;
+  const std::uint64_t stale =
+      during_next_episode([&] { publish_once("/pnp_franka_sim/stall_tracker", seconds); });
+  expect_ended(stale, "controller_fault", "protective_stop", "object");
+  for (std::uint64_t seed = stale + 1; seed < 3000 + kEpisodes; ++seed) {
+    expect_ended(seed, "controller_fault", "protective_stop", "at the start");
+  }
+  for (const auto& e : events(gateway, "episode_end")) {
+    if (e["seed"] > stale) {
+      EXPECT_EQ(e["steps"], 0) << e.dump();
+    }
+  }
+
+  const auto status = gateway.wait(300s);
+  ASSERT_TRUE(status && status->ok()) << gateway.diagnostics();
+  const nlohmann::json summary = nlohmann::json::parse(gateway.stdout_text());
+  EXPECT_EQ(summary["episodes"], kEpisodes) << summary.dump();
+  EXPECT_EQ(summary["seeds"].back(), 3000 + kEpisodes - 1) << summary.dump();
 }
 
 }  // namespace

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <numbers>
+#include <thread>
 #include <vector>
 
 #include "common/error.h"
@@ -174,6 +176,38 @@ TEST_F(FrankaBackendTest, TheTrackersPoseIsReportedOnlyWhileFresh) {
   EXPECT_DOUBLE_EQ(controller_.state().arm.object_base->position_m.x(), 0.5);
   run(150);  // 250 ms old: more than object_timeout_s
   EXPECT_FALSE(controller_.state().arm.object_base.has_value());
+}
+
+// A tracker publishes at its own rate: the pose it sent before a scene reset may still be
+// the latest when the arm's first state after it arrives. The reset waits for the
+// tracker's first pose after it, so the scene before is never read as the scene after.
+TEST_F(FrankaBackendTest, ASceneResetWaitsForTheTrackersFirstPoseAfterIt) {
+  using Clock = std::chrono::steady_clock;
+  const auto feed = [&](const std::stop_token& stop, const std::atomic<bool>& reset_done) {
+    int after_reset = 0;
+    while (!stop.stop_requested()) {
+      std::this_thread::sleep_for(milliseconds(2));
+      FrankaStateSample s = sample(flange_);
+      s.received = Clock::now();
+      arm_.on_state(s);
+      arm_.tick(s.received, 0.002);
+      // The tracker's first pose after the reset comes 20 states after the arm's first.
+      if (reset_done.load() && ++after_reset == 20) {
+        arm_.on_object({Clock::now(), {Eigen::Vector3d(0.3, -0.1, 0.02), {1, 0, 0, 0}}});
+      }
+    }
+  };
+  std::atomic<bool> reset_done{false};
+  arm_.on_object({Clock::now(), {Eigen::Vector3d(0.5, 0.1, 0.02), {1, 0, 0, 0}}});
+  std::jthread ros(feed, std::cref(reset_done));
+  const auto lease = controller_.acquire_lease("test", 0);
+  const auto [seed, report] = arm_.reset_scene(lease.id, [&] {
+    reset_done.store(true);
+    return 7;
+  });
+  EXPECT_EQ(seed, 7);
+  ASSERT_TRUE(report.arm.object_base.has_value());
+  EXPECT_DOUBLE_EQ(report.arm.object_base->position_m.x(), 0.3);
 }
 
 TEST_F(FrankaBackendTest, TheHandGetsOneGoalPerOpeningOrClosingNotOnePerStep) {
