@@ -12,32 +12,22 @@
 #include <chrono>
 #include <csignal>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
 
 #include "pnp/robot/v1/robot_controller.grpc.pb.h"
 #include "tests/integration/child_process.h"
+#include "tests/integration/ros_master.h"
 
 namespace {
 
 namespace rv1 = pnp::robot::v1;
 using pnp::integration::ChildProcess;
-using pnp::integration::read_file;
+using pnp::integration::RosMaster;
 using pnp::integration::TempDir;
 using pnp::integration::wait_until;
 using namespace std::chrono_literals;
-
-// Nodes advertise loopback addresses only, and log under the test's directory.
-std::vector<std::pair<std::string, std::string>> ros_env(const TempDir& dir,
-                                                         const std::string& master_uri) {
-  return {{"ROS_MASTER_URI", master_uri},
-          {"ROS_IP", "127.0.0.1"},
-          {"ROS_HOSTNAME", "127.0.0.1"},
-          {"ROS_HOME", dir.path().string()},
-          {"ROS_LOG_DIR", (dir.path() / "ros_log").string()}};
-}
 
 // The gateway's log events (JSON lines on stderr) named `event`, in order.
 std::vector<nlohmann::json> events(const ChildProcess& gateway, const std::string& event) {
@@ -64,23 +54,8 @@ void publish_once(const std::string& topic, const Message& message) {
 class FrankaChain : public ::testing::Test {
  protected:
   void SetUp() override {
-    master_.emplace("rosmaster",
-                    std::vector<std::string>{"/usr/bin/rosmaster", "--core", "-p", "0"},
-                    dir_.path(), ros_env(dir_, "http://127.0.0.1:0/"));
-    // rosmaster on port 0 names the port it took in its log.
-    const std::regex uri(R"(uri\[(http://127\.0\.0\.1:[0-9]+/)\])");
-    ASSERT_TRUE(wait_until(
-        [&] {
-          const std::string log = read_file(dir_.path() / "ros_log" / "master.log");
-          std::smatch match;
-          if (!std::regex_search(log, match, uri)) return false;
-          master_uri_ = match[1];
-          return true;
-        },
-        30s))
-        << master_->diagnostics();
-    for (const auto& [name, value] : ros_env(dir_, master_uri_))
-      setenv(name.c_str(), value.c_str(), 1);
+    master_.emplace(dir_.path());
+    for (const auto& [name, value] : master_->node_env()) setenv(name.c_str(), value.c_str(), 1);
     int argc = 0;
     ros::init(argc, nullptr, "franka_chain_test",
               ros::init_options::NoSigintHandler | ros::init_options::AnonymousName);
@@ -93,7 +68,7 @@ class FrankaChain : public ::testing::Test {
     sim.insert(sim.end(), sim_flags.begin(), sim_flags.end());
     if (scene) sim.insert(sim.end(), {"--address", "127.0.0.1:0"});
     sim_args_ = sim;
-    sim_.emplace("franka_sim", sim, dir_.path(), ros_env(dir_, master_uri_));
+    sim_.emplace("franka_sim", sim, dir_.path(), master_->node_env());
     std::vector<std::string> bridge{PNP_BIN_DIR "/pnp-franka-bridge", "--address", "127.0.0.1:0",
                                     "--limits", PNP_SOURCE_DIR "/deploy/robot/controller.json"};
     if (scene) {
@@ -101,7 +76,7 @@ class FrankaChain : public ::testing::Test {
       ASSERT_GT(scene_port_, 0) << sim_->diagnostics();
       bridge.insert(bridge.end(), {"--stand-in-scene", "127.0.0.1:" + std::to_string(scene_port_)});
     }
-    bridge_.emplace("franka_bridge", bridge, dir_.path(), ros_env(dir_, master_uri_));
+    bridge_.emplace("franka_bridge", bridge, dir_.path(), master_->node_env());
     const int port = bridge_->port();
     ASSERT_GT(port, 0) << bridge_->diagnostics();
     channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
@@ -177,7 +152,7 @@ class FrankaChain : public ::testing::Test {
     std::vector<std::string> args = sim_args_;
     if (scene_port_ > 0) args.back() = "127.0.0.1:" + std::to_string(scene_port_);
     sim_.reset();
-    sim_.emplace("franka_sim_restarted", args, dir_.path(), ros_env(dir_, master_uri_));
+    sim_.emplace("franka_sim_restarted", args, dir_.path(), master_->node_env());
   }
 
   // The served policy: the checked-in Panda hierarchy (trained in the paper world).
@@ -226,8 +201,8 @@ class FrankaChain : public ::testing::Test {
   }
 
   TempDir dir_{"franka_chain"};
-  std::string master_uri_;
-  std::optional<ChildProcess> master_, sim_, bridge_, inference_;
+  std::optional<RosMaster> master_;
+  std::optional<ChildProcess> sim_, bridge_, inference_;
   std::vector<std::string> sim_args_;
   int scene_port_ = 0;
   std::shared_ptr<grpc::Channel> channel_;
