@@ -40,6 +40,7 @@ class ControllerLink {
   void release_lease();
   bool has_lease() const { return !lease_id_.empty(); }
   const std::string& client_name() const { return client_name_; }
+  const std::string& lease_id() const { return lease_id_; }
 
   // nullopt when the controller does not answer within `timeout` (a stall).
   std::optional<robot::v1::GetStateResponse> state(std::chrono::milliseconds timeout);

@@ -36,10 +36,8 @@ std::chrono::milliseconds millis(double seconds) {
 // say) before the run gives up: nothing moves meanwhile.
 constexpr auto kInferenceStartWait = std::chrono::seconds(10);
 
-// What the served policy was trained on (its world reads actions: they are planned that
-// way). Waits up to kInferenceStartWait for the service to be reachable (Ctrl-C ends the
-// wait within 100 ms); UNAVAILABLE after that, FAILED_PRECONDITION while no whole policy
-// is served.
+}  // namespace
+
 policy::v1::ServedRole served_policy(policy::v1::PolicyService::Stub& policy,
                                      const std::atomic<bool>& interrupted) {
   const auto give_up = std::chrono::steady_clock::now() + kInferenceStartWait;
@@ -68,6 +66,8 @@ policy::v1::ServedRole served_policy(policy::v1::PolicyService::Stub& policy,
   }
   return status.roles(0);
 }
+
+namespace {
 
 robot::ControllerReading reading_of(const rv1::ControllerFeedback& state) {
   robot::ControllerReading r;
@@ -243,10 +243,6 @@ EpisodeReport GatewayEpisodeRunner::run(const EpisodeOptions& options,
 void GatewayEpisodeRunner::leave_arm_safe(Episode& episode) {
   EpisodeReport& report = episode.report;
   controller_.close_stream();
-  if (episode.options.dry_run) {
-    report.arm_left = "untouched (dry run)";
-    return;
-  }
   const bool fault =
       report.end == EpisodeEnd::kDeadman || report.end == EpisodeEnd::kControllerFault;
   if (report.end != EpisodeEnd::kInterrupted && !fault) {
@@ -288,7 +284,7 @@ bool GatewayEpisodeRunner::start_episode(Episode& episode) {
                                           "--ack REASON)");
     return false;
   }
-  if (before.stop_kind() == rv1::STOP_KIND_PROTECTIVE && !episode.options.dry_run) {
+  if (before.stop_kind() == rv1::STOP_KIND_PROTECTIVE) {
     controller_.clear_protective_stop();
     log_("protective_stop_cleared", {{"reason", before.stop_reason()}});
   }
@@ -312,12 +308,11 @@ bool GatewayEpisodeRunner::start_episode(Episode& episode) {
   }
   episode.held_orientation_base = services::from_proto(start.commanded()).orientation;
   episode.lockstep = before.lockstep();
-  if (!episode.options.dry_run) controller_.open_stream();
+  controller_.open_stream();
   log_("episode_start", {{"seed", episode.options.seed},
                          {"world", sim::world_profile_name(episode.world)},
                          {"goal_sim_m", to_json(episode.goal_sim)},
-                         {"lockstep", episode.lockstep},
-                         {"dry_run", episode.options.dry_run}});
+                         {"lockstep", episode.lockstep}});
   return true;
 }
 
@@ -357,9 +352,7 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     return false;
   }
   const rv1::ControllerFeedback& state = response->state();
-  // A dry run sends no target, so nothing renews its lease: on a real-time controller it
-  // lapses after the lease's timeout, and the dry run, which drives nothing, reads on.
-  if (!episode.options.dry_run && response->lease_holder() != controller_.client_name()) {
+  if (response->lease_holder() != controller_.client_name()) {
     episode.end(EpisodeEnd::kLeaseLost,
                 "the lease is now held by \"" + response->lease_holder() + "\"");
     return false;
@@ -371,6 +364,13 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
   if (state.mode() == rv1::CONTROLLER_MODE_STOPPED) {
     episode.end(EpisodeEnd::kStopped, "the arm was stopped (" + stop_description(*response) + ")");
     return false;
+  }
+  if (episode.options.watch) {
+    if (auto verdict = episode.options.watch()) {
+      episode.end(verdict->end, std::move(verdict->reason));
+      log_("watch", {{"step", report.steps}, {"reason", report.reason}});
+      return false;
+    }
   }
   const robot::ControllerReading reading = reading_of(state);
   if (auto bad = robot::reading_error(reading, config_.base_frame_id,
@@ -466,13 +466,6 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
                    {"target_sim_m", to_json(planned.sim.position_m)},
                    {"target_gripper_width_m", planned.base.gripper_width_m}});
   }
-  if (episode.options.dry_run) {
-    log_("target", {{"step", report.steps},
-                    {"position_base_m", to_json(planned.base.pose.position_m)},
-                    {"gripper_width_m", planned.base.gripper_width_m}});
-    report.cycle_us.push_back(micros(Clock::now() - start));
-    return true;
-  }
   const auto send_start = Clock::now();
   const bool go_on = send_and_take_feedback(episode, planned.base);
   report.send_us.push_back(micros(Clock::now() - send_start));
@@ -490,8 +483,7 @@ double GatewayEpisodeRunner::distance_to_last_target(const Episode& episode,
 // the policy (GatewayConfig::max_arrival_wait_periods).
 bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
                                            const robot::ControllerReading& reading) const {
-  if (config_.max_arrival_wait_periods == 0 || !episode.last_accepted || episode.options.dry_run)
-    return false;
+  if (config_.max_arrival_wait_periods == 0 || !episode.last_accepted) return false;
   if (episode.waited >= config_.max_arrival_wait_periods) return false;
   return distance_to_last_target(episode, reading) > config_.arrival_tolerance_m;
 }
@@ -501,9 +493,7 @@ bool GatewayEpisodeRunner::waiting_for_arm(const Episode& episode,
 // controller holds by itself). False when the episode must end.
 bool GatewayEpisodeRunner::hold(Episode& episode, const rv1::ControllerFeedback& state) {
   const std::optional<robot::PoseTarget> again =
-      episode.options.dry_run ? std::nullopt
-                              : robot::hold_target(config_, episode.last_accepted,
-                                                   services::from_proto(state.commanded()));
+      robot::hold_target(config_, episode.last_accepted, services::from_proto(state.commanded()));
   if (!again) {
     ++episode.report.held_without_target;
     return true;
@@ -522,6 +512,7 @@ bool GatewayEpisodeRunner::send_and_take_feedback(Episode& episode,
   services::to_proto(planned.pose, *target.mutable_pose());
   target.set_gripper_width_m(planned.gripper_width_m);
   const auto deadman = millis(config_.deadman_timeout_s);
+  if (episode.options.record) episode.options.record(episode.options.seed, report.steps, planned);
   const bool sent = controller_.send(target);
   const auto feedback = sent ? controller_.feedback(Clock::now() + deadman) : std::nullopt;
   if (!feedback) {

@@ -29,20 +29,28 @@
 #include "robot/controller_reading.h"
 #include "robot/gateway_config.h"
 #include "robot/safety_limits.h"
+#include "robot/target_planner.h"
 
 namespace pnp::gateway {
 
 using EventLog = std::function<void(std::string_view event, const nlohmann::json& fields)>;
 
+enum class EpisodeEnd;
+struct WatchVerdict;
+
 struct EpisodeOptions {
   std::uint64_t seed = 0;                    // the stand-in's scene seed (ResetScene)
   bool reset_scene = true;                   // false for a real arm: the scene is what it is
   std::optional<Eigen::Vector3d> goal_base;  // without a scene reset: where the object goes
-  bool dry_run = false;                      // compute and log targets, send nothing
   // Log a "cycle" event every cycle (simulation frame: grip point, object, opening, the
   // subtask and action the policy chose, the planned target): what an operator or a
   // failure analysis reads back. Off by default: 25 lines a second.
   bool trace = false;
+  // Each cycle, after the controller's state is read: a reason to end the episode there
+  // (a dry run's watch on the live arm, which must hold while the shadow plays).
+  std::function<std::optional<WatchVerdict>()> watch;
+  // Every target sent, as sent (a hold's repeat included): the episode's record.
+  std::function<void(std::uint64_t seed, int step, const robot::PoseTarget& target)> record;
 };
 
 enum class EpisodeEnd {
@@ -55,6 +63,11 @@ enum class EpisodeEnd {
   kLeaseLost,        // another client holds the arm, or the lease lapsed
 };
 std::string_view episode_end_name(EpisodeEnd end);
+
+struct WatchVerdict {
+  EpisodeEnd end;
+  std::string reason;
+};
 // Whether no further episode may start after this one (the run ends).
 bool ends_run(EpisodeEnd end);
 
@@ -78,6 +91,13 @@ struct EpisodeReport {
   std::vector<double> state_us, inference_us;  // the cycle's first two phases
   std::vector<double> send_us;  // the target sent and its feedback taken (cycles that send)
 };
+
+// What the served policy was trained on (its world reads actions: they are planned that
+// way). Waits up to 10 s for the inference service to be reachable (Ctrl-C ends the wait
+// within 100 ms, as kCancelled); UNAVAILABLE after that, FAILED_PRECONDITION while no
+// whole policy is served.
+policy::v1::ServedRole served_policy(policy::v1::PolicyService::Stub& policy,
+                                     const std::atomic<bool>& interrupted);
 
 class GatewayEpisodeRunner {
  public:

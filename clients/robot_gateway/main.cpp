@@ -2,7 +2,8 @@
 // controller's state, asks the inference service for the next action, changes the target
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
-//   --episodes 5 --seed 1000 [--dry-run] [--trace] [--json] [--strict] [--await-operator S]
+//   --episodes 5 --seed 1000 [--dry-run [--controller-limits FILE]] [--record FILE] [--trace]
+//   [--json] [--strict] [--await-operator S]
 //   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
 // clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once. Any
@@ -23,10 +24,12 @@
 #include <optional>
 #include <thread>
 
+#include "clients/robot_gateway/dry_run.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_metrics.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "clients/robot_gateway/operator_wait.h"
+#include "clients/robot_gateway/target_record.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
 #include "services/common/address.h"
@@ -84,7 +87,17 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(3);
   app.add_option("--name", name, "client name on the lease")->capture_default_str();
-  app.add_flag("--dry-run", dry_run, "compute and log targets without sending them");
+  app.add_flag("--dry-run", dry_run,
+               "play each episode on a shadow of the arm (the simulated Panda, from the live "
+               "arm's state and object) while the live arm holds; nothing is sent to it");
+  std::string controller_limits = "deploy/robot/controller.json";
+  app.add_option("--controller-limits", controller_limits,
+                 "a dry run's shadow checks every target against these: the live controller's "
+                 "own limits (its --limits file)")
+      ->capture_default_str();
+  std::string record_path;
+  app.add_option("--record", record_path,
+                 "write every target sent (in a dry run: that would be sent) as JSON lines");
   app.add_flag("--trace", trace,
                "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
@@ -181,17 +194,32 @@ int main(int argc, char** argv) {
     gateway::EventLog log = [&](std::string_view event, const nlohmann::json& fields) {
       if (!quiet || event == "policy_warning") services::log_event("gateway", event, fields);
     };
-    gateway::GatewayEpisodeRunner runner(config, controller, *policy, log, strict);
+    std::optional<gateway::TargetRecord> record;
+    if (!record_path.empty()) record.emplace(record_path);
+    std::optional<gateway::DryRun> dry;
+    std::optional<gateway::GatewayEpisodeRunner> runner;
+    if (dry_run) {
+      dry.emplace(config, robot::ControllerLimits::load(controller_limits), controller, *policy,
+                  log, strict, interrupted);
+    } else {
+      runner.emplace(config, controller, *policy, log, strict);
+    }
     std::vector<gateway::EpisodeReport> reports;
     for (int k = 0; k < episodes && !interrupted.load(); ++k) {
-      reports.push_back(runner.run(
-          {.seed = seed + static_cast<std::uint64_t>(k),
-           .reset_scene = goal.empty(),
-           .goal_base = goal.empty() ? std::nullopt
-                                     : std::optional<Eigen::Vector3d>({goal[0], goal[1], goal[2]}),
-           .dry_run = dry_run,
-           .trace = trace},
-          interrupted));
+      gateway::EpisodeOptions options{
+          .seed = seed + static_cast<std::uint64_t>(k),
+          .reset_scene = goal.empty(),
+          .goal_base = goal.empty() ? std::nullopt
+                                    : std::optional<Eigen::Vector3d>({goal[0], goal[1], goal[2]}),
+          .trace = trace,
+          .watch = {},
+          .record = {}};
+      if (record) {
+        options.record = [&record](std::uint64_t s, int step, const robot::PoseTarget& t) {
+          record->add(s, step, t);
+        };
+      }
+      reports.push_back(dry ? dry->run(options, interrupted) : runner->run(options, interrupted));
       episode_metrics.record(reports.back());
       const bool cleared =
           reports.back().end == gateway::EpisodeEnd::kStopped && await_operator_s > 0 &&

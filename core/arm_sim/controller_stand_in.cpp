@@ -59,10 +59,20 @@ void ControllerStandIn::run_real_time(const std::stop_token& stop) {
 
 ControllerStandIn::SceneReset ControllerStandIn::reset_scene(const std::string& lease_id,
                                                              std::uint64_t seed) {
+  return placed(lease_id, [&] { return arm.reset(seed); });
+}
+
+ControllerStandIn::SceneReset ControllerStandIn::reset_scene_to(const std::string& lease_id,
+                                                                const ObservedScene& scene) {
+  return placed(lease_id, [&] { return arm.reset_to(scene); });
+}
+
+ControllerStandIn::SceneReset ControllerStandIn::placed(const std::string& lease_id,
+                                                        const std::function<Episode()>& place) {
   const CallerLock lock(*this);
   require_lease(lease_id, robot::LeaseBook::Clock::now());
   require_not_stopped("resetting the scene");
-  const Episode episode = arm.reset(seed);
+  const Episode episode = place();
   publish_locked();
   return {report_locked(robot::ControllerStatus::kOk, {}), episode.goal_base};
 }

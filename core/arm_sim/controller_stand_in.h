@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <stop_token>
 #include <string>
 #include <thread>
@@ -54,11 +55,15 @@ class ControllerStandIn : private detail::SimulatedArmHolder, public robot::ArmC
   // Home posture, and the object and goal of the environment's episode `seed`. Needs the
   // lease (FAILED_PRECONDITION otherwise) and an arm that is not stopped.
   SceneReset reset_scene(const std::string& lease_id, std::uint64_t seed);
+  // The same from a scene a real arm measured (SimulatedArm::reset_to).
+  SceneReset reset_scene_to(const std::string& lease_id, const ObservedScene& scene);
 
   ClockMode clock() const { return clock_; }
 
  private:
   void run_real_time(const std::stop_token& stop);
+  // The scene `place` sets, under the lease, then the report.
+  SceneReset placed(const std::string& lease_id, const std::function<Episode()>& place);
 
   const ClockMode clock_;
   std::jthread clock_thread_;  // real time only; last member: stops first

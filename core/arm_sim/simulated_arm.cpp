@@ -242,15 +242,78 @@ Episode SimulatedArm::reset(Rng& rng) {
   }
   // As the environment's fingers start: open in the paper world, closed in gym.
   set_gripper(world_->parameters().fingers_open_at_reset ? max_gripper_width_m() : 0.0);
-  mj_forward(m, d);
+  return start_at_rest({layout.goal, base_from_world_.apply(layout.goal)});
+}
 
-  episode_ = {layout.goal, base_from_world_.apply(layout.goal)};
+// After the scene is placed: derived quantities computed, the arm at rest holding where
+// it is, no fault.
+Episode SimulatedArm::start_at_rest(const Episode& episode) {
+  mj_forward(model_.get(), data_.get());
+  episode_ = episode;
   hold_measured_pose();
   torques_.fill(0);
   torques_demanded_.fill(0);
   mode_ = ArmMode::kIdle;
   fault_ = sim::PhysicsFault::kNone;
   return episode_;
+}
+
+Episode SimulatedArm::reset_to(const ObservedScene& scene) {
+  const mjModel* m = model_.get();
+  const sim::WorldIds& ids = world_->ids();
+  const auto require_pose = [](const Pose& p, const char* field) {
+    if (!p.position_m.allFinite() || !p.orientation.coeffs().allFinite() ||
+        std::abs(p.orientation.norm() - 1) > kUnitQuaternionTolerance)
+      throw_invalid_argument(field, "a finite position and a unit quaternion", "another pose");
+  };
+  require_pose(scene.tcp_base, "tcp_base");
+  require_pose(scene.object_base, "object_base");
+  if (!scene.goal_base.allFinite())
+    throw_invalid_argument("goal_base", "a finite position", "a non-finite one");
+  if (!(scene.finger_gap_m >= 0 && scene.finger_gap_m <= max_gripper_width_m()))
+    throw_invalid_argument("finger_gap_m", fmt::format("0 to {} m", max_gripper_width_m()),
+                           std::to_string(scene.finger_gap_m));
+  // The posture first, on the scratch data: a pose out of reach changes nothing.
+  mjData* s = scratch_.get();
+  mj_resetData(m, s);
+  std::copy(world_->home_qpos().begin(), world_->home_qpos().end(), s->qpos);
+  const Pose tcp_world = world_from_base_.apply(scene.tcp_base);
+  sim::IkOptions ik_options;
+  ik_options.max_iterations = options_.reach_ik_iterations;
+  const sim::IkResult ik = sim::solve_site_ik(
+      m, s, ids.grip_site, ids.arm_joints,
+      {tcp_world.position_m, tcp_world.orientation.toRotationMatrix()}, home_, ik_options);
+  if (ik.position_error_m > options_.reach_position_tolerance_m ||
+      ik.rotation_error_rad > options_.reach_rotation_tolerance_rad) {
+    throw_invalid_argument("tcp_base", "a grip point pose the arm can take",
+                           fmt::format("one inverse kinematics stops {:.4f} m and {:.4f} rad from",
+                                       ik.position_error_m, ik.rotation_error_rad));
+  }
+  mjData* d = data_.get();
+  mj_resetData(m, d);
+  std::copy(s->qpos, s->qpos + m->nq, d->qpos);
+  std::copy(world_->home_qvel().begin(), world_->home_qvel().end(), d->qvel);
+  // The fingers: left as the home posture has them if that is the gap measured.
+  const double home_gap = d->qpos[ids.finger_qpos[0]] + d->qpos[ids.finger_qpos[1]];
+  if (scene.finger_gap_m != home_gap) {
+    for (int q : ids.finger_qpos) d->qpos[q] = scene.finger_gap_m / 2;
+  }
+  const Pose object_world = world_from_base_.apply(scene.object_base);
+  mjtNum* object_qpos = d->qpos + ids.object_qpos;
+  for (int k = 0; k < 3; ++k) object_qpos[k] = object_world.position_m(k);
+  const Eigen::Quaterniond& q = object_world.orientation;
+  object_qpos[3] = q.w();
+  object_qpos[4] = q.x();
+  object_qpos[5] = q.y();
+  object_qpos[6] = q.z();
+  mju_zero(d->qvel + ids.object_dof, 6);
+  const Eigen::Vector3d goal_world = world_from_base_.apply(scene.goal_base);
+  for (int k = 0; k < 3; ++k) {
+    d->mocap_pos[3 * ids.gripper_mocap + k] = tcp_world.position_m(k);
+    d->mocap_pos[3 * ids.target_mocap + k] = goal_world(k);
+  }
+  set_gripper(scene.finger_gap_m > max_gripper_width_m() / 2 ? max_gripper_width_m() : 0.0);
+  return start_at_rest({goal_world, scene.goal_base});
 }
 
 TargetStatus SimulatedArm::set_target(const Eigen::Vector3d& position_base_m,

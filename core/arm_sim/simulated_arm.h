@@ -133,6 +133,15 @@ struct Episode {
   Eigen::Vector3d goal_base;
 };
 
+// A scene as a real arm's sensors give it, in the base frame: where its grip point is,
+// how far apart its fingers are, where the object is, and the goal.
+struct ObservedScene {
+  Pose tcp_base;
+  double finger_gap_m = 0;
+  Pose object_base;
+  Eigen::Vector3d goal_base = Eigen::Vector3d::Zero();
+};
+
 struct ArmState {
   ArmMode mode = ArmMode::kIdle;
   double sim_time_s = 0;
@@ -176,6 +185,13 @@ class SimulatedArm {
   // The same from a random stream the caller keeps: the next episode layout `rng` draws
   // (PickPlaceEnv's fresh episode after a fault draws the same way).
   Episode reset(Rng& rng);
+
+  // The arm put where `scene` says, at rest: the home posture moved by inverse kinematics
+  // to its grip point's pose (unchanged if already there), the fingers at its gap (and
+  // commanded open if more than half open, closed otherwise), the object at its pose. So
+  // a dry run can play from what a real arm measured. INVALID_ARGUMENT naming the field
+  // for a pose the arm cannot take or a non-finite value; nothing changes then.
+  Episode reset_to(const ObservedScene& scene);
 
   // A TCP pose target in the base frame and a finger opening (0 to 0.08 m); max speed 0
   // means the default. Refusals change nothing.
@@ -236,6 +252,7 @@ class SimulatedArm {
   Pose forward_kinematics(const JointVector& q);  // TCP pose, on the scratch data
   JointVector measured_joints() const;
   void hold_measured_pose();
+  Episode start_at_rest(const Episode& episode);
   void set_gripper(double width_m);
 
   ArmControllerOptions options_;

@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "arm_sim/arm_actuated_env.h"
+#include "clients/robot_gateway/dry_run.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_summary.h"
 #include "clients/robot_gateway/operator_wait.h"
@@ -33,10 +34,9 @@ namespace {
 namespace rv1 = robot::v1;
 namespace pv1 = policy::v1;
 
-EpisodeOptions episode(std::uint64_t seed, bool dry_run = false) {
+EpisodeOptions episode(std::uint64_t seed) {
   EpisodeOptions options;
   options.seed = seed;
-  options.dry_run = dry_run;
   return options;
 }
 
@@ -569,38 +569,65 @@ TEST_F(GatewayEndToEnd, AHoldTheControllerRefusesEndsTheEpisodeThere) {
   EXPECT_EQ(report.arrival_waits, 1);
 }
 
-TEST_F(GatewayEndToEnd, DryRunSendsNothing) {
+// A dry run plays the episode on a shadow of the arm started where the live arm is, and
+// sends the live arm nothing; what it records is what the live run then sends, target by
+// target (both arms are the same simulated Panda in lockstep here).
+TEST_F(GatewayEndToEnd, ADryRunsRecordIsWhatTheLiveRunSends) {
   const robot::GatewayConfig config = panda_config();
   controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
-  GatewayEpisodeRunner runner(config, *controller_, *policy_stub_, recorder());
-  const EpisodeReport report = runner.run(episode(901, true), not_interrupted_);
-  EXPECT_EQ(report.end, EpisodeEnd::kStepCap);
-  EXPECT_FALSE(report.success);
-  EXPECT_EQ(count("target"), config.max_episode_steps);
-  EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the controller
+  using Record = std::vector<std::pair<int, robot::PoseTarget>>;
+  const auto recording = [](Record& into) {
+    return [&into](std::uint64_t, int step, const robot::PoseTarget& t) {
+      into.emplace_back(step, t);
+    };
+  };
+  Record dry_record, live_record;
+  EpisodeOptions options = episode(903);
+  options.record = recording(dry_record);
+  const EpisodeReport dry = DryRun(config, robot::ControllerLimits{}, *controller_, *policy_stub_,
+                                   recorder(), false, not_interrupted_)
+                                .run(options, not_interrupted_);
+  EXPECT_EQ(arm_->state().sequence, 0u);  // no target ever reached the live controller
+  EXPECT_EQ(dry.arm_left, "untouched (dry run)");
+  ASSERT_GT(dry_record.size(), 10u);
+
+  options.record = recording(live_record);
+  const EpisodeReport live = GatewayEpisodeRunner(config, *controller_, *policy_stub_, recorder())
+                                 .run(options, not_interrupted_);
+  EXPECT_EQ(dry.end, live.end) << dry.reason << " / " << live.reason;
+  EXPECT_EQ(dry.steps, live.steps);
+  ASSERT_EQ(dry_record.size(), live_record.size());
+  for (std::size_t k = 0; k < dry_record.size(); ++k) {
+    const auto& [dry_step, d] = dry_record[k];
+    const auto& [live_step, l] = live_record[k];
+    EXPECT_EQ(dry_step, live_step);
+    EXPECT_EQ(d.pose.position_m, l.pose.position_m) << "target " << k;
+    EXPECT_EQ(d.pose.orientation.coeffs(), l.pose.orientation.coeffs()) << "target " << k;
+    EXPECT_EQ(d.gripper_width_m, l.gripper_width_m) << "target " << k;
+  }
 }
 
-// On a real-time controller nothing renews a dry run's lease (it sends no target): it lapses
-// within the episode, and the dry run still plays to its end (it ended "the lease is now
-// held by \"\"" after half a second, exit 3, the README's first gateway command).
-TEST_F(GatewayEndToEnd, ADryRunOnARealTimeControllerOutlivesItsLease) {
-  arm_sim::StandInOptions options = lockstep();
-  options.clock = arm_sim::ClockMode::kRealTime;
-  arm_sim::ControllerStandIn arm(options);
-  services::RobotControllerServiceImpl controller_service(arm);
-  services::SimulatedSceneServiceImpl scene_service(arm);
-  services::ServerRuntime server(
-      services::ServerConfig{"127.0.0.1:0", 1 << 20, {&controller_service, &scene_service}, {}});
-  const auto controller = link_to(server.port(), not_interrupted_);
-  controller->acquire_lease("test-gateway", std::chrono::milliseconds(200));
-  robot::GatewayConfig config = panda_config();
-  config.max_episode_steps = 20;  // 0.8 s: four lease timeouts
-  GatewayEpisodeRunner runner(config, *controller, *policy_stub_, recorder());
-  const EpisodeReport report = runner.run(episode(903, true), not_interrupted_);
-  EXPECT_EQ(report.end, EpisodeEnd::kStepCap) << report.reason;
-  EXPECT_EQ(count("target"), config.max_episode_steps);
-  EXPECT_EQ(arm.state().sequence, 0u);
-  server.shutdown(std::chrono::milliseconds(500));
+// The live arm must hold while the shadow plays: stopped meanwhile, the dry run's episode
+// ends there with the reason.
+TEST_F(GatewayEndToEnd, ADryRunEndsWhenTheLiveArmIsStopped) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  EventLog log = [this](std::string_view event, const nlohmann::json& fields) {
+    events_.push_back({std::string(event), fields});
+    if (event == "cycle" && fields["step"] == 5)
+      arm_->stop("a person walked into the cell", robot::StopKind::kEmergency);
+  };
+  EpisodeOptions options = episode(903);
+  options.trace = true;
+  const EpisodeReport report = DryRun(config, robot::ControllerLimits{}, *controller_,
+                                      *policy_stub_, log, false, not_interrupted_)
+                                   .run(options, not_interrupted_);
+  EXPECT_EQ(report.end, EpisodeEnd::kStopped);
+  EXPECT_NE(report.reason.find("dry run: the live arm was stopped"), std::string::npos)
+      << report.reason;
+  EXPECT_NE(report.reason.find("a person walked into the cell"), std::string::npos);
+  EXPECT_EQ(report.steps, 6);
+  EXPECT_EQ(arm_->state().sequence, 0u);
 }
 
 // The trace is opt-in: one "cycle" event per cycle that planned a target and one

@@ -321,6 +321,36 @@ TEST_F(FrankaChain, TheGatewayDrivesTheBridgeAsItDrivesTheSimulatedController) {
   EXPECT_GE(bridge["successes"].get<int>(), 16) << bridge.dump();
 }
 
+// A dry run on a real arm's terms (no scene reset: the goal given, the object where the
+// tracker sees it): the shadow plays from the arm's measured state, the record holds the
+// targets it would have sent, and the arm itself does not move.
+TEST_F(FrankaChain, ADryRunThroughTheBridgeRecordsTheMotionAndTheArmHolds) {
+  start_chain(std::vector<std::string>{"--world", "paper"});
+  const int inference_port = start_inference();
+  ASSERT_TRUE(wait_until([&] { return state().state().has_object(); }, 5s));
+  const auto before = state().state().measured().position();
+  const std::string record = dir_.file("record.jsonl");
+  std::vector<std::string> args = gateway_args(bridge_->port(), inference_port, 1);
+  args.insert(args.end(), {"--goal", "0.45,0.1,0.15", "--dry-run", "--controller-limits",
+                           PNP_SOURCE_DIR "/deploy/robot/controller.json", "--record", record});
+  ChildProcess gateway("gateway_dry_run", args, dir_.path());
+  const auto status = gateway.wait(120s);
+  ASSERT_TRUE(status && status->ok()) << gateway.diagnostics();
+  const nlohmann::json summary = nlohmann::json::parse(gateway.stdout_text());
+  EXPECT_EQ(summary["arm_left"]["untouched (dry run)"], 1) << summary.dump();
+  std::istringstream lines(pnp::integration::read_file(record));
+  int targets = 0;
+  for (std::string line; std::getline(lines, line); ++targets) {
+    const nlohmann::json target = nlohmann::json::parse(line);
+    EXPECT_EQ(target["position_base_m"].size(), 3u) << line;
+  }
+  EXPECT_GT(targets, 5);
+  const auto after = state().state().measured().position();
+  EXPECT_NEAR(after.x_m(), before.x_m(), 0.002);
+  EXPECT_NEAR(after.y_m(), before.y_m(), 0.002);
+  EXPECT_NEAR(after.z_m(), before.z_m(), 0.002);
+}
+
 // Every fault a real arm meets, each in its own episode of one gateway run through the
 // bridge (--await-operator): each ends that episode with the arm held, and the run goes
 // on to its last episode. The test is the operator: it clears each emergency stop by

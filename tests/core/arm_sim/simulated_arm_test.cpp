@@ -168,6 +168,39 @@ TEST(SimulatedArm, HoldsTheHomePoseWithoutTargets) {
   EXPECT_EQ(end.mode, ArmMode::kIdle);
 }
 
+// A dry run's shadow starts from what the live arm measured: from a seeded scene's own
+// measurements it is that scene again; elsewhere the arm goes where it was measured; a pose
+// it cannot take is refused naming the field, and nothing changes.
+TEST(SimulatedArm, ResetToAMeasuredSceneIsThatScene) {
+  SimulatedArm seeded = make_arm();
+  const Episode episode = seeded.reset(7);
+  const ArmState measured = seeded.state();
+  SimulatedArm arm = make_arm();
+  arm.reset_to({measured.tcp_base, measured.finger_gap_m, measured.object_base, episode.goal_base});
+  const ArmState again = arm.state();
+  EXPECT_EQ(again.joint_positions, measured.joint_positions);
+  EXPECT_LT((again.object_world.position_m - measured.object_world.position_m).norm(), 1e-12);
+  EXPECT_EQ(again.finger_gap_m, measured.finger_gap_m);
+  EXPECT_LT((arm.episode().goal_base - episode.goal_base).norm(), 1e-12);
+
+  Pose lower = measured.tcp_base;
+  lower.position_m.z() -= 0.05;
+  arm.reset_to({lower, 0.02, measured.object_base, episode.goal_base});
+  EXPECT_LT((arm.state().tcp_base.position_m - lower.position_m).norm(), 0.005);
+  EXPECT_NEAR(arm.state().finger_gap_m, 0.02, 1e-12);
+
+  Pose far = measured.tcp_base;
+  far.position_m.x() += 2.0;
+  try {
+    arm.reset_to({far, 0.02, measured.object_base, episode.goal_base});
+    ADD_FAILURE() << "a pose out of reach was taken";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("tcp_base"), std::string::npos) << e.what();
+  }
+  EXPECT_LT((arm.state().tcp_base.position_m - lower.position_m).norm(), 0.005);
+}
+
 // Moves the TCP to `world_position` (gripper down, opening `width_m`) and lets it settle.
 void move_and_settle(SimulatedArm& arm, const Eigen::Vector3d& world_position, double width_m) {
   const Eigen::Quaterniond down = arm.state().commanded_base.orientation;
