@@ -35,19 +35,6 @@ plot::EpisodeFrame frame_of(const sv1::EnvState& state, int subtask) {
   return f;
 }
 
-int subtask_index(common::v1::Subtask subtask) {
-  switch (subtask) {
-    case common::v1::SUBTASK_APPROACH:
-      return 0;
-    case common::v1::SUBTASK_MANIPULATE:
-      return 1;
-    case common::v1::SUBTASK_RETRACT:
-      return 2;
-    default:
-      return -1;
-  }
-}
-
 // Closes the environment on every way out.
 class EnvLease {
  public:
@@ -105,7 +92,7 @@ plot::EpisodeTrace play_one(sv1::SimulationService::Stub& sim, pv1::PolicyServic
                              "the simulation service");
     const auto& result = stepped.results(0);
     state = result.state();
-    trace.frames.push_back(frame_of(state, subtask_index(answer.prediction().subtask())));
+    trace.frames.push_back(frame_of(state, services::subtask_index(answer.prediction().subtask())));
     if (result.episode_over()) {
       trace.success = result.task_success();
       break;

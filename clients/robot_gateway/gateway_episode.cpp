@@ -306,6 +306,7 @@ bool GatewayEpisodeRunner::start_episode(Episode& episode) {
     episode.end(EpisodeEnd::kControllerFault, "bad controller reading at the start: " + *bad);
     return false;
   }
+  episode.report.goal_sim = {episode.goal_sim.x(), episode.goal_sim.y(), episode.goal_sim.z()};
   episode.held_orientation_base = services::from_proto(start.commanded()).orientation;
   episode.lockstep = before.lockstep();
   controller_.open_stream();
@@ -422,6 +423,12 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     prediction = episode.session.answer(asked + deadman, episode.interrupted);
   }
   report.inference_us.push_back(micros(Clock::now() - asked));
+  if (prediction) {
+    report.path.push_back(
+        {{measured_sim.position_m.x(), measured_sim.position_m.y(), measured_sim.position_m.z()},
+         {object_sim.position_m.x(), object_sim.position_m.y(), object_sim.position_m.z()},
+         services::subtask_index(static_cast<common::v1::Subtask>(prediction->subtask))});
+  }
   if (!prediction) {
     episode.session_broken = true;  // a late answer would pair with the wrong request
     if (episode.interrupted.load()) {

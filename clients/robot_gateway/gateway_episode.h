@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "clients/robot_gateway/controller_link.h"
+#include "plot/episode_view_svg.h"
 #include "pnp/policy/v1/policy_service.grpc.pb.h"
 #include "robot/controller_reading.h"
 #include "robot/gateway_config.h"
@@ -90,6 +91,10 @@ struct EpisodeReport {
   std::vector<double> cycle_us;                // state -> inference -> transform -> send, per cycle
   std::vector<double> state_us, inference_us;  // the cycle's first two phases
   std::vector<double> send_us;  // the target sent and its feedback taken (cycles that send)
+  // What the episode view draws (simulation frame): the goal, and at each decision the
+  // grip point, the object and the subtask the policy chose.
+  std::array<double, 3> goal_sim{};
+  std::vector<plot::EpisodeFrame> path;
 };
 
 // What the served policy was trained on (its world reads actions: they are planned that

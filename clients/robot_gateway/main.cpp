@@ -2,8 +2,8 @@
 // controller's state, asks the inference service for the next action, changes the target
 // into the arm's base frame (config: deploy/robot/gateway.json), checks it and streams it.
 //   --controller 127.0.0.1:50070 --inference 127.0.0.1:50060 --config deploy/robot/gateway.json
-//   --episodes 5 --seed 1000 [--dry-run [--controller-limits FILE]] [--record FILE] [--trace]
-//   [--json] [--strict] [--await-operator S]
+//   --episodes 5 --seed 1000 [--dry-run [--controller-limits FILE]] [--record FILE] [--view DIR]
+//   [--trace] [--json] [--strict] [--await-operator S]
 //   [--tls-ca FILE [--tls-cert FILE --tls-key FILE] [--token-file FILE]]  (both services)
 // Ctrl-C emergency-stops the arm within one policy period and ends the run (an operator
 // clears the stop: pnpctl robot resume --ack REASON); a second Ctrl-C exits at once. Any
@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "clients/robot_gateway/dry_run.h"
+#include "clients/robot_gateway/episode_view.h"
 #include "clients/robot_gateway/gateway_episode.h"
 #include "clients/robot_gateway/gateway_metrics.h"
 #include "clients/robot_gateway/gateway_summary.h"
@@ -98,6 +99,10 @@ int main(int argc, char** argv) {
   std::string record_path;
   app.add_option("--record", record_path,
                  "write every target sent (in a dry run: that would be sent) as JSON lines");
+  std::string view_dir;
+  app.add_option("--view", view_dir,
+                 "write each episode's view (grip point path by subtask, object, goal) as "
+                 "DIR/episode_SEED.svg");
   app.add_flag("--trace", trace,
                "log a cycle event every cycle: grip point, object, subtask, action, target");
   app.add_flag("--json", json, "print the summary as one JSON object");
@@ -220,6 +225,10 @@ int main(int argc, char** argv) {
         };
       }
       reports.push_back(dry ? dry->run(options, interrupted) : runner->run(options, interrupted));
+      if (!view_dir.empty()) {
+        log("episode_view",
+            {{"path", gateway::write_episode_view(view_dir, reports.back(), dry_run).string()}});
+      }
       episode_metrics.record(reports.back());
       const bool cleared =
           reports.back().end == gateway::EpisodeEnd::kStopped && await_operator_s > 0 &&

@@ -112,6 +112,12 @@ common::v1::Subtask to_proto(sim::Subtask subtask) {
   return common::v1::SUBTASK_UNSPECIFIED;
 }
 
+int subtask_index(common::v1::Subtask subtask) {
+  for (const sim::Subtask s : sim::kAllSubtasks)
+    if (to_proto(s) == subtask) return static_cast<int>(s);
+  return -1;
+}
+
 std::string role_name(common::v1::Role role, std::string_view field) {
   switch (role) {
     case common::v1::ROLE_APPROACH:

@@ -29,6 +29,9 @@ common::v1::Robot to_proto(sim::Robot robot);
 common::v1::World to_proto(sim::WorldProfile world);
 common::v1::ObjectShape to_proto(sim::ObjectShape object);
 common::v1::Subtask to_proto(sim::Subtask subtask);
+// A subtask as an index (sim::Subtask's value: 0 approach, 1 manipulate, 2 retract), -1
+// for none (an end-to-end policy, or unspecified): what the episode view colours by.
+int subtask_index(common::v1::Subtask subtask);
 
 // Role names as the store keeps them ("approach", ..., "hlc", "e2e").
 std::string role_name(common::v1::Role role, std::string_view field);

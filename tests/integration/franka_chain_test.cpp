@@ -332,7 +332,8 @@ TEST_F(FrankaChain, ADryRunThroughTheBridgeRecordsTheMotionAndTheArmHolds) {
   const std::string record = dir_.file("record.jsonl");
   std::vector<std::string> args = gateway_args(bridge_->port(), inference_port, 1);
   args.insert(args.end(), {"--goal", "0.45,0.1,0.15", "--dry-run", "--controller-limits",
-                           PNP_SOURCE_DIR "/deploy/robot/controller.json", "--record", record});
+                           PNP_SOURCE_DIR "/deploy/robot/controller.json", "--record", record,
+                           "--view", dir_.file("views")});
   ChildProcess gateway("gateway_dry_run", args, dir_.path());
   const auto status = gateway.wait(120s);
   ASSERT_TRUE(status && status->ok()) << gateway.diagnostics();
@@ -345,6 +346,10 @@ TEST_F(FrankaChain, ADryRunThroughTheBridgeRecordsTheMotionAndTheArmHolds) {
     EXPECT_EQ(target["position_base_m"].size(), 3u) << line;
   }
   EXPECT_GT(targets, 5);
+  // The operator's picture of it: the shadow's path, drawn as the dashboard draws episodes.
+  const std::string view = pnp::integration::read_file(dir_.path() / "views" / "episode_3000.svg");
+  EXPECT_NE(view.find("class=\"episode\""), std::string::npos) << view.substr(0, 200);
+  EXPECT_NE(view.find("dry run"), std::string::npos);
   const auto after = state().state().measured().position();
   EXPECT_NEAR(after.x_m(), before.x_m(), 0.002);
   EXPECT_NEAR(after.y_m(), before.y_m(), 0.002);
