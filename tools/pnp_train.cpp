@@ -244,6 +244,15 @@ void print_summary(const Options& o, const nlohmann::json& s) {
         s.at("train_env_steps").get<long long>(),
         s.at("cancelled").get<bool>() ? " (cancelled)" : " (the step cap)", wall);
   }
+  if (s.contains("wall_breakdown")) {
+    const auto& b = s.at("wall_breakdown");
+    std::printf(
+        "  wall time %.1f s: rollouts %.1f, updates %.1f, evaluation %.1f, checkpoints and store "
+        "%.1f, other %.1f\n",
+        b.at("total_s").get<double>(), b.at("rollout_s").get<double>(),
+        b.at("update_s").get<double>(), b.at("eval_s").get<double>(),
+        b.at("report_s").get<double>(), b.at("other_s").get<double>());
+  }
   std::printf(
       "  preset %s, %s, %s world (%s hand), %s/%s, seed %llu, GEMM path %s; checkpoint %s (the "
       "whole result: %s/%s.json, or --json)\n",

@@ -196,6 +196,8 @@ HlcTrainingOutput train_choreographer(
   config.a3c.validate();
   config.stop.validate();
   const auto start = Clock::now();
+  const PhaseClock phase_clock;
+  WallBreakdown phases;  // written under the gate's turn
   auto shared = std::make_unique<ChoreographerNet>(config.a3c.network);
   Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
   shared->initialise(init_rng);
@@ -266,6 +268,7 @@ HlcTrainingOutput train_choreographer(
           return;
         }
         // Apply this worker's gradients to the shared network, in ticket order.
+        const auto update_start = Clock::now();
         auto grads = local.gradient_blocks();
         double norm_sq = 0;
         for (auto g : grads) norm_sq += std::pow(nn::l2_norm(g), 2);
@@ -286,6 +289,7 @@ HlcTrainingOutput train_choreographer(
           shared->normalizer().update(raw_input);
         }
         shared->normalizer().refresh();
+        PhaseClock::add(phases.update_s, update_start);
         result.train_env_steps += episode.env_steps;
         ++result.train_episodes;
         ++result.updates;  // one per applied episode
@@ -308,6 +312,7 @@ HlcTrainingOutput train_choreographer(
           const auto& top = evaluation.sequences.front();
           point.detail = top.choices + " x" + std::to_string(top.episodes);
           result.eval_wall_s += std::chrono::duration<double>(Clock::now() - eval_start).count();
+          PhaseClock::add(phases.eval_s, eval_start);
           point.env_steps = result.train_env_steps;
           point.episodes = result.train_episodes;
           point.wall_s = wall_offset + std::chrono::duration<double>(Clock::now() - start).count();
@@ -316,8 +321,10 @@ HlcTrainingOutput train_choreographer(
           while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
           point.stop_score = point.task_success;
           const bool finished = stop.record(point, point.stop_score, result);
+          const auto report_start = Clock::now();
           if (config.on_evaluation) config.on_evaluation(point, *shared);
           if (progress) progress(point);
+          PhaseClock::add(phases.report_s, report_start);
           if (finished) {
             gate.stop();
             return;
@@ -332,14 +339,20 @@ HlcTrainingOutput train_choreographer(
       gate.stop();
     }
   };
+  const auto workers_start = Clock::now();
   {
     std::vector<std::jthread> threads;
     for (long long w = 0; w < workers; ++w) threads.emplace_back(worker, w);
   }
+  // What the workers did besides the serialized phases: their episodes and gradients.
+  double workers_s = 0;
+  PhaseClock::add(workers_s, workers_start);
+  phases.rollout_s = std::max(0.0, workers_s - phases.update_s - phases.eval_s - phases.report_s);
   if (failure) std::rethrow_exception(failure);
   result.train_env_steps += in_flight_steps.load();
   result.cancelled = cancelled;
   result.wall_s = wall_offset + std::chrono::duration<double>(Clock::now() - start).count();
+  result.breakdown = phase_clock.finish(phases);
   return {std::move(result), std::move(shared)};
 }
 

@@ -98,6 +98,8 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
   config.ddpg.validate();
   config.stop.validate();
   const auto start = Clock::now();
+  const PhaseClock phase_clock;
+  WallBreakdown phases;
   Rng init_rng(stream_seed(config.seed, Stream::kNetworkInit));
   const bool end_to_end = config.algorithm == ExpertAlgorithm::kEndToEnd;
   auto agent = std::make_unique<DdpgHerAgent>(agent_config(config), init_rng);
@@ -177,6 +179,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     }
     // Rollouts: one episode per environment, in parallel; each episode's environment
     // and noise seeds depend only on its index, so any thread count gives the same data.
+    const auto rollout_start = Clock::now();
     const LearnedExpert learner(agent->snapshot(), scripted_gripper(config.ddpg));
     const long long first_episode = result.train_episodes;
     const bool offline = config.algorithm == ExpertAlgorithm::kBcOffline;
@@ -207,7 +210,9 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
       ++result.train_episodes;
       stored += e.segment.size();
     }
+    PhaseClock::add(phases.rollout_s, rollout_start);
     // Updates.
+    const auto update_start = Clock::now();
     const int cycle_updates = schedule.updates_for(stored);
     if (replay.size() > 0) {
       for (int u = 0; u < cycle_updates; ++u) {
@@ -230,6 +235,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
       }
       if (ddpg) agent->update_targets(cycle_updates);
     }
+    PhaseClock::add(phases.update_s, update_start);
     if (config.control.on_steps) config.control.on_steps(result.train_env_steps);
     if (result.train_env_steps < next_eval) continue;
 
@@ -262,6 +268,7 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
           report.subtask_mean_steps[static_cast<std::size_t>(config.subtask)];
     }
     result.eval_wall_s += seconds_since(eval_start);
+    PhaseClock::add(phases.eval_s, eval_start);
     point.env_steps = result.train_env_steps;
     point.episodes = result.train_episodes;
     point.wall_s = wall_offset + seconds_since(start);
@@ -276,11 +283,14 @@ SubtaskTrainingOutput train_subtask_expert(const sim::EnvFactory& envs,
     while (next_eval <= result.train_env_steps) next_eval += config.stop.eval_interval_steps;
     point.stop_score = expert_stop_score(point, config.subtask, end_to_end);
     const bool done = stop.record(point, point.stop_score, result);
+    const auto report_start = Clock::now();
     if (config.on_evaluation) config.on_evaluation(point, *agent);
     if (progress) progress(point);
+    PhaseClock::add(phases.report_s, report_start);
     if (done) break;
   }
   result.wall_s = wall_offset + seconds_since(start);
+  result.breakdown = phase_clock.finish(phases);
   return {std::move(result), std::move(agent)};
 }
 

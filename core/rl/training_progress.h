@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "rl/wall_breakdown.h"
+
 namespace pnp::rl {
 
 struct CurvePoint {
@@ -73,6 +75,7 @@ struct TrainingResult {
   long long eval_env_steps = 0;  // spent on evaluation: not counted in training
   double wall_s = 0;             // everything
   double eval_wall_s = 0;        // of which evaluation
+  WallBreakdown breakdown;       // this process's part of wall_s, by phase
   std::vector<CurvePoint> curve;
 };
 

@@ -21,6 +21,11 @@ nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
   return out;
 }
 
+nlohmann::json breakdown_json(const rl::WallBreakdown& b) {
+  return {{"rollout_s", b.rollout_s}, {"update_s", b.update_s}, {"eval_s", b.eval_s},
+          {"report_s", b.report_s},   {"other_s", b.other_s},   {"total_s", b.total_s}};
+}
+
 nlohmann::json result_json(const rl::TrainingResult& r) {
   return {
       {"reached", r.reached},
@@ -33,6 +38,7 @@ nlohmann::json result_json(const rl::TrainingResult& r) {
       {"eval_steps", r.eval_env_steps},
       {"wall_s", r.wall_s},
       {"eval_wall_s", r.eval_wall_s},
+      {"wall_breakdown", breakdown_json(r.breakdown)},
       {"curve", curve_json(r.curve)}};
 }
 

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <set>
+#include <thread>
 
 #include "common/error.h"
 #include "rl/ddpg_her_agent.h"
@@ -10,6 +12,7 @@
 #include "rl/seed_streams.h"
 #include "rl/subtask_trainer.h"
 #include "rl/update_schedule.h"
+#include "support/wall_breakdown_expectations.h"
 
 namespace pnp::rl {
 namespace {
@@ -322,6 +325,23 @@ TEST(SubtaskTraining, ApproachExpertLearnsWithinASmallBudget) {
   EXPECT_GT(out.result.eval_env_steps, 0);
   // The steps reported are the steps of the model that goes on, not of an earlier one.
   EXPECT_EQ(out.result.steps_to_target, out.result.train_env_steps);
+}
+
+// The run's wall time by phase: every phase measured, none counted twice (their sum is
+// within the run's wall time), evaluation as the stop rule's clock has it, and the
+// callbacks that write checkpoints and the store under "report" (each sleeps 30 ms here).
+TEST(SubtaskTraining, ItsWallTimeIsBrokenDownByPhase) {
+  SubtaskTrainingConfig config = small_approach_run(ExpertAlgorithm::kDdpgHer, 7, 1000);
+  config.stop.consecutive = 5;  // runs to the cap: two evaluations
+  int evaluations = 0;
+  const auto out = train_subtask_expert(
+      sim::LocalEnvFactory(sim::WorldModel::load(sim::Robot::kFetch, sim::ObjectShape::kBlock)),
+      config, [&](const CurvePoint&) {
+        ++evaluations;
+        std::this_thread::sleep_for(std::chrono::milliseconds(30));
+      });
+  ASSERT_EQ(evaluations, 2);
+  expect_a_whole_breakdown(out.result, 0.060);
 }
 
 TEST(StopTracker, StepsToTargetAreThoseOfTheConfirmingEvaluation) {
