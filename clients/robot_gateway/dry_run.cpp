@@ -61,9 +61,17 @@ DryRun::~DryRun() {
 EpisodeReport DryRun::run(const EpisodeOptions& options, const std::atomic<bool>& interrupted) {
   rv1::ControllerFeedback start;
   Eigen::Vector3d goal_base;
+  bool live_stopped = false;  // an emergency stop ends the run, as on a live run
   try {
+    const rv1::GetStateResponse before = live_.state();
+    live_stopped = before.stop_kind() == rv1::STOP_KIND_EMERGENCY;
+    if (live_stopped) {
+      throw Error(ErrorCode::kFailedPrecondition,
+                  "the live arm is emergency-stopped (" + before.stop_reason() +
+                      "): an operator must clear it (pnpctl robot resume --ack REASON)");
+    }
     if (options.reset_scene) {
-      if (live_.state().lease_holder().empty() && live_.has_lease()) live_.reacquire_lease();
+      if (before.lease_holder().empty() && live_.has_lease()) live_.reacquire_lease();
       const rv1::ResetSceneResponse scene = live_.reset_scene(options.seed);
       start = scene.state();
       goal_base = services::from_proto(scene.goal());
@@ -86,7 +94,9 @@ EpisodeReport DryRun::run(const EpisodeOptions& options, const std::atomic<bool>
   } catch (const Error& e) {
     EpisodeReport report;
     report.seed = options.seed;
-    report.end = interrupted.load() ? EpisodeEnd::kInterrupted : EpisodeEnd::kControllerFault;
+    report.end = interrupted.load() ? EpisodeEnd::kInterrupted
+                 : live_stopped     ? EpisodeEnd::kStopped
+                                    : EpisodeEnd::kControllerFault;
     report.reason =
         std::string("dry run: the shadow could not start where the live arm is: ") + e.what();
     report.arm_left = "untouched (dry run)";

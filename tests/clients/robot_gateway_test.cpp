@@ -607,6 +607,22 @@ TEST_F(GatewayEndToEnd, ADryRunsRecordIsWhatTheLiveRunSends) {
   }
 }
 
+// An emergency-stopped live arm: the dry run does not start, and ends the run as a live
+// run would (an operator must clear the stop first).
+TEST_F(GatewayEndToEnd, ADryRunOnAnEmergencyStoppedArmEndsTheRun) {
+  const robot::GatewayConfig config = panda_config();
+  controller_->acquire_lease("test-gateway", std::chrono::milliseconds(5000));
+  arm_->stop("a person walked into the cell", robot::StopKind::kEmergency);
+  const EpisodeReport report = DryRun(config, robot::ControllerLimits{}, *controller_,
+                                      *policy_stub_, recorder(), false, not_interrupted_)
+                                   .run(episode(903), not_interrupted_);
+  EXPECT_EQ(report.end, EpisodeEnd::kStopped);
+  EXPECT_TRUE(ends_run(report.end));
+  EXPECT_NE(report.reason.find("a person walked into the cell"), std::string::npos)
+      << report.reason;
+  EXPECT_EQ(report.steps, 0);
+}
+
 // The live arm must hold while the shadow plays: stopped meanwhile, the dry run's episode
 // ends there with the reason.
 TEST_F(GatewayEndToEnd, ADryRunEndsWhenTheLiveArmIsStopped) {
