@@ -119,8 +119,7 @@ EpisodeReport DryRun::run(const EpisodeOptions& options, const std::atomic<bool>
 
 // The live arm must hold, and the object stay, while the shadow plays.
 std::optional<WatchVerdict> DryRun::watch_live(const rv1::ControllerFeedback& start) {
-  const auto deadman = std::chrono::milliseconds(
-      static_cast<long long>(std::ceil(config_.deadman_timeout_s * 1000)));
+  const auto deadman = config_.deadman_timeout();
   const auto now = live_.state(deadman);
   if (!now) {
     return WatchVerdict{EpisodeEnd::kDeadman,

@@ -28,10 +28,6 @@ double micros(Clock::duration d) {
   return std::chrono::duration<double, std::micro>(d).count();
 }
 
-std::chrono::milliseconds millis(double seconds) {
-  return std::chrono::milliseconds(static_cast<long long>(std::ceil(seconds * 1000)));
-}
-
 // How long an episode's start waits for an unreachable inference service (restarting,
 // say) before the run gives up: nothing moves meanwhile.
 constexpr auto kInferenceStartWait = std::chrono::seconds(10);
@@ -253,7 +249,7 @@ void GatewayEpisodeRunner::leave_arm_safe(Episode& episode) {
   const std::string reason =
       fault ? "gateway fault: " + report.reason : std::string("gateway interrupted (Ctrl-C)");
   try {
-    controller_.stop(reason, kind, millis(config_.deadman_timeout_s));
+    controller_.stop(reason, kind, config_.deadman_timeout());
     report.arm_left = fault ? "protective_stop" : "emergency_stop";
   } catch (const Error& e) {
     report.arm_left = std::string("stop not delivered: ") + e.what();
@@ -343,7 +339,7 @@ bool GatewayEpisodeRunner::cycle(Episode& episode) {
     episode.end(EpisodeEnd::kInterrupted, "interrupted by the operator");
     return false;
   }
-  const auto deadman = millis(config_.deadman_timeout_s);
+  const auto deadman = config_.deadman_timeout();
   const auto start = Clock::now();
   const auto response = controller_.state(deadman);
   report.state_us.push_back(micros(Clock::now() - start));
@@ -518,7 +514,7 @@ bool GatewayEpisodeRunner::send_and_take_feedback(Episode& episode,
   services::to_proto(std::chrono::system_clock::now(), *target.mutable_stamp());
   services::to_proto(planned.pose, *target.mutable_pose());
   target.set_gripper_width_m(planned.gripper_width_m);
-  const auto deadman = millis(config_.deadman_timeout_s);
+  const auto deadman = config_.deadman_timeout();
   if (episode.options.record) episode.options.record(episode.options.seed, report.steps, planned);
   const bool sent = controller_.send(target);
   const auto feedback = sent ? controller_.feedback(Clock::now() + deadman) : std::nullopt;

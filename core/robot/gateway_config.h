@@ -18,6 +18,8 @@
 // is required: a frame calibration silently defaulted would move a real arm to the wrong
 // place. Unknown keys are refused, so a misspelt limit cannot fall back to its default.
 
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
@@ -40,6 +42,10 @@ struct GatewayConfig {
   // The policy was trained with these; a different period changes what an action does.
   double policy_period_s = sim::layout::kStepDuration_s;  // 0.04 s (25 Hz)
   double deadman_timeout_s = 0.1;  // no fresh action for this long: the arm holds
+  // The same, rounded up to whole milliseconds: every wait the gateway bounds by it.
+  std::chrono::milliseconds deadman_timeout() const {
+    return std::chrono::milliseconds(static_cast<long long>(std::ceil(deadman_timeout_s * 1000)));
+  }
   // The lease the gateway asks for: the controller's own dead-man, which holds the arm
   // when targets stop for this long (the protocol's default, 500 ms).
   double lease_timeout_s = 0.5;
