@@ -39,8 +39,12 @@ train::v1::TrainingRun fetch_run(const Endpoints& endpoints, const std::string& 
 
 int runs_command(const Endpoints& endpoints, const std::string& role, const std::string& state,
                  int limit, bool csv) {
-  Table table({"run", "role", "algorithm", "seed", "state", "steps", "score", "target", "success",
-               "to_target", "checkpoint", "error"});
+  std::vector<std::string> columns = {"run",     "role",      "algorithm", "seed",
+                                      "state",   "steps",     "score",     "target",
+                                      "success", "to_target", "checkpoint"};
+  columns.insert(columns.end(), kWallColumnNames.begin(), kWallColumnNames.end());
+  columns.emplace_back("error");
+  Table table(columns);
   std::vector<std::string> roles;
   if (role.empty()) {
     for (const std::string_view r : kRoles) roles.emplace_back(r);
@@ -79,11 +83,21 @@ int runs_command(const Endpoints& endpoints, const std::string& role, const std:
   }
   order_newest_first(runs);
   for (const auto& run : runs) {
-    table.add({std::to_string(run.run_id()), short_name(run.role()), short_name(run.algorithm()),
-               std::to_string(run.seed()), outcome_text(run), std::to_string(run.env_steps()),
-               score_text(run), fixed(run.target_success(), 2), fixed(run.last_success(), 2),
-               run.reached() ? std::to_string(run.steps_to_target()) : "-",
-               std::to_string(run.latest_checkpoint_id()), run.error()});
+    std::vector<std::string> row = {std::to_string(run.run_id()),
+                                    short_name(run.role()),
+                                    short_name(run.algorithm()),
+                                    std::to_string(run.seed()),
+                                    outcome_text(run),
+                                    std::to_string(run.env_steps()),
+                                    score_text(run),
+                                    fixed(run.target_success(), 2),
+                                    fixed(run.last_success(), 2),
+                                    run.reached() ? std::to_string(run.steps_to_target()) : "-",
+                                    std::to_string(run.latest_checkpoint_id())};
+    const std::vector<std::string> wall = wall_columns(run);
+    row.insert(row.end(), wall.begin(), wall.end());
+    row.push_back(run.error());
+    table.add(row);
   }
   csv ? table.print_csv(stdout) : table.print(stdout);
   return 0;

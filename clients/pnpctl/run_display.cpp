@@ -1,6 +1,7 @@
 #include "clients/pnpctl/run_display.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "clients/pnpctl/rpc.h"
 #include "clients/pnpctl/table.h"
@@ -22,6 +23,16 @@ std::string outcome_text(const train::v1::TrainingRun& run) {
 
 std::string score_text(const train::v1::TrainingRun& run) {
   return run.has_last_score() ? fixed(run.last_score(), 2) : "-";
+}
+
+std::vector<std::string> wall_columns(const train::v1::TrainingRun& run) {
+  const auto& wall = run.wall_breakdown();
+  if (!(wall.total_s() > 0)) return std::vector<std::string>(kWallColumnNames.size(), "-");
+  const auto share = [&](double seconds) {
+    return std::to_string(static_cast<int>(std::lround(100 * seconds / wall.total_s()))) + "%";
+  };
+  return {duration_text(wall.total_s()), share(wall.rollout_s()), share(wall.update_s()),
+          share(wall.eval_s())};
 }
 
 std::string progress_line(const train::v1::TrainingRun& run, const train::v1::MetricPoint* metric,

@@ -18,6 +18,12 @@ std::string outcome_text(const train::v1::TrainingRun& run);
 // score was kept.
 std::string score_text(const train::v1::TrainingRun& run);
 
+// Where the run's wall time went, as `pnpctl runs` shows it: its total ("1m05s") and the
+// shares of rollouts, updates and evaluation ("12%"); "-" each while no trainer's part has
+// ended (the store sums a run's parts as they end).
+std::vector<std::string> wall_columns(const train::v1::TrainingRun& run);
+inline const std::vector<std::string> kWallColumnNames = {"wall", "rollout", "updates", "eval"};
+
 // "approach  run 3  [#######-------]  12.0k/60.0k steps  score 0.70/0.97  success 0.84
 //  eta<=0m41s  running"
 std::string progress_line(const train::v1::TrainingRun& run, const train::v1::MetricPoint* metric,

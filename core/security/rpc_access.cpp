@@ -60,6 +60,7 @@ constexpr std::array kTable{
     RpcAccess{"/pnp.store.v1.StoreService/RenewLease", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/ReleaseRun", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/CountClaimable", kReader, false},
+    RpcAccess{"/pnp.store.v1.StoreService/AddRunWallTime", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/RecordMetric", kService, false},
     RpcAccess{"/pnp.store.v1.StoreService/ListMetrics", kReader, false},
     RpcAccess{"/pnp.store.v1.StoreService/SaveCheckpoint", kService, false},

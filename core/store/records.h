@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/roles.h"
+#include "common/wall_breakdown.h"
 
 namespace pnp::store {
 
@@ -30,6 +31,10 @@ using pnp::kRoles;
 inline constexpr std::size_t kMaxRequestIdBytes = 512;
 
 using Millis = std::int64_t;  // Unix time in milliseconds
+
+// The longest phase of one trainer's part of a run the store accepts (Store::add_wall_time):
+// about 116 days, far past any run; more is a broken clock or a forged request.
+inline constexpr double kMaxWallPartSeconds = 1e7;
 
 struct RunSpec {
   std::string role;       // approach, manipulate, retract, hlc or e2e
@@ -60,6 +65,9 @@ struct RunRecord {
   // of the role may take the run over once the lease has expired.
   std::string owner;
   std::optional<Millis> lease_expires_ms;
+  // Where the run's wall time went: the sum of the parts its trainers recorded as they
+  // stopped (Store::add_wall_time), all zero until the first part ends.
+  WallBreakdown wall{};
 };
 
 struct MetricPoint {

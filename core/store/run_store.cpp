@@ -1,6 +1,8 @@
 #include "store/run_store.h"
 
 #include <chrono>
+#include <cmath>
+#include <utility>
 
 #include "common/checksum.h"
 #include "common/error.h"
@@ -13,7 +15,8 @@ namespace {
 constexpr const char* kRunColumns =
     "id, role, algorithm, robot, object, seed, config_json, code_commit, parent_checkpoint_id, "
     "state, error, env_steps, last_success, reached, steps_to_target, created_ms, updated_ms, "
-    "finished_ms, gemm_path, last_score, owner, lease_expires_ms";
+    "finished_ms, gemm_path, last_score, owner, lease_expires_ms, wall_rollout_s, wall_update_s, "
+    "wall_eval_s, wall_report_s, wall_other_s";
 
 RunRecord read_run(const Statement& st) {
   RunRecord r;
@@ -39,6 +42,13 @@ RunRecord read_run(const Statement& st) {
   if (!st.is_null(19)) r.last_score = st.column_double(19);
   r.owner = st.column_text(20);
   if (!st.is_null(21)) r.lease_expires_ms = st.column_int(21);
+  WallBreakdown& w = r.wall;
+  w.rollout_s = st.column_double(22);
+  w.update_s = st.column_double(23);
+  w.eval_s = st.column_double(24);
+  w.report_s = st.column_double(25);
+  w.other_s = st.column_double(26);
+  w.total_s = w.rollout_s + w.update_s + w.eval_s + w.report_s + w.other_s;
   return r;
 }
 
@@ -206,6 +216,17 @@ RunRecord RunStore::set_state(std::int64_t id, RunState state, const std::string
   return get_run(id);
 }
 
+void RunStore::require_open_and_owned(std::int64_t run_id, const std::string& owner,
+                                      std::string_view action) {
+  const RunRecord run = get_run(run_id);
+  if (is_terminal(run.state)) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                "run " + std::to_string(run_id) + " is " + std::string(run_state_name(run.state)) +
+                    ": a finished run cannot " + std::string(action));
+  }
+  require_owner(run, owner, action);
+}
+
 void RunStore::require_owner(const RunRecord& run, const std::string& owner,
                              std::string_view action) {
   if (run.owner == owner) return;
@@ -254,6 +275,38 @@ bool RunStore::renew_lease(std::int64_t run_id, const std::string& owner,
   return db_.changes() == 1;
 }
 
+RunRecord RunStore::add_wall_time(std::int64_t run_id, const WallBreakdown& part,
+                                  const std::string& owner) {
+  const std::pair<const char*, double> phases[] = {{"wall.rollout_s", part.rollout_s},
+                                                   {"wall.update_s", part.update_s},
+                                                   {"wall.eval_s", part.eval_s},
+                                                   {"wall.report_s", part.report_s},
+                                                   {"wall.other_s", part.other_s}};
+  for (const auto& [field, seconds] : phases) {
+    if (!std::isfinite(seconds) || seconds < 0 || seconds > kMaxWallPartSeconds) {
+      throw_invalid_argument(
+          field,
+          "seconds in [0, " + std::to_string(static_cast<long long>(kMaxWallPartSeconds)) + "]",
+          std::to_string(seconds));
+    }
+  }
+  Transaction tx(db_);
+  require_open_and_owned(run_id, owner, "record wall time");
+  auto st = db_.prepare(
+      "UPDATE runs SET wall_rollout_s = wall_rollout_s + ?, wall_update_s = wall_update_s + ?, "
+      "wall_eval_s = wall_eval_s + ?, wall_report_s = wall_report_s + ?, "
+      "wall_other_s = wall_other_s + ? WHERE id = ?");
+  st.bind(1, part.rollout_s)
+      .bind(2, part.update_s)
+      .bind(3, part.eval_s)
+      .bind(4, part.report_s)
+      .bind(5, part.other_s)
+      .bind(6, run_id);
+  st.run();
+  tx.commit();
+  return get_run(run_id);
+}
+
 void RunStore::release(std::int64_t run_id, const std::string& owner) {
   auto st = db_.prepare(
       "UPDATE runs SET owner = NULL, lease_expires_ms = NULL WHERE id = ? AND owner = ?");
@@ -290,13 +343,7 @@ CheckpointInfo RunStore::record_evaluation(std::int64_t run_id, const MetricPoin
 
 void RunStore::insert_metric(std::int64_t run_id, const MetricPoint& p, bool reached,
                              std::optional<long long> steps_to_target, const std::string& owner) {
-  const RunRecord run = get_run(run_id);
-  if (is_terminal(run.state)) {
-    throw Error(ErrorCode::kFailedPrecondition, "run " + std::to_string(run_id) + " is " +
-                                                    std::string(run_state_name(run.state)) +
-                                                    ": it takes no more metrics");
-  }
-  require_owner(run, owner, "take metrics");
+  require_open_and_owned(run_id, owner, "take metrics");
   auto insert = db_.prepare(
       "INSERT OR REPLACE INTO metrics (run_id, env_steps, episodes, wall_s, task_success, "
       "subtask_success, sampled_success, critic_loss, actor_loss, updates, stop_score) "

@@ -37,6 +37,8 @@ class RunStore final : public Store {
                                       std::chrono::milliseconds lease) override;
   bool renew_lease(std::int64_t run_id, const std::string& owner,
                    std::chrono::milliseconds lease) override;
+  RunRecord add_wall_time(std::int64_t run_id, const WallBreakdown& part,
+                          const std::string& owner = "") override;
   void release(std::int64_t run_id, const std::string& owner) override;
   std::int64_t count_claimable(const std::string& role, const std::string& owner) override;
 
@@ -79,6 +81,9 @@ class RunStore final : public Store {
 
  private:
   void require_owner(const RunRecord& run, const std::string& owner, std::string_view action);
+  // FAILED_PRECONDITION for a finished run, else as require_owner.
+  void require_open_and_owned(std::int64_t run_id, const std::string& owner,
+                              std::string_view action);
   void insert_metric(std::int64_t run_id, const MetricPoint& point, bool reached,
                      std::optional<long long> steps_to_target, const std::string& owner);
   CheckpointInfo save_owned_checkpoint(std::int64_t run_id, long long env_steps,

@@ -11,7 +11,7 @@ namespace pnp::store {
 namespace {
 
 // Append only: a migration that has shipped is never edited.
-constexpr std::array<std::string_view, 8> kMigrations{
+constexpr std::array<std::string_view, 9> kMigrations{
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -177,6 +177,15 @@ CREATE UNIQUE INDEX runs_by_request_id ON runs (request_id) WHERE request_id IS 
     R"sql(
 ALTER TABLE runs ADD COLUMN created_by TEXT NOT NULL DEFAULT '';
 CREATE INDEX runs_by_creator ON runs (created_by, state);
+)sql",
+    // 9: where each run's wall time went, by phase (Store::add_wall_time); zero for runs
+    // trained before.
+    R"sql(
+ALTER TABLE runs ADD COLUMN wall_rollout_s REAL NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN wall_update_s REAL NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN wall_eval_s REAL NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN wall_report_s REAL NOT NULL DEFAULT 0;
+ALTER TABLE runs ADD COLUMN wall_other_s REAL NOT NULL DEFAULT 0;
 )sql",
 };
 

@@ -97,6 +97,13 @@ class Store {
   // (cancelled, or taken over after the lease expired): its trainer must stop.
   virtual bool renew_lease(std::int64_t run_id, const std::string& owner,
                            std::chrono::milliseconds lease) = 0;
+  // Adds one trainer's part of the run's wall time, by phase, to the run's sums (a resumed
+  // run is trained in parts), as the trainer stops: finished, cancelled or shut down (a
+  // trainer that failed records none). Every phase in [0, kMaxWallPartSeconds] (INVALID_ARGUMENT
+  // naming it); FAILED_PRECONDITION for a finished run (its sums are final: a run cancelled while
+  // training keeps those of its earlier parts); ABORTED unless `owner` owns the run.
+  virtual RunRecord add_wall_time(std::int64_t run_id, const WallBreakdown& part,
+                                  const std::string& owner = "") = 0;
   // Gives the run up (still RUNNING, resumable): another server may take it at once.
   virtual void release(std::int64_t run_id, const std::string& owner) = 0;
   // Runs of `role` claim_next would hand to `owner` now.

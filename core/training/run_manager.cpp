@@ -460,6 +460,18 @@ RunManager::Turn RunManager::finish(store::Store& store, std::int64_t run_id, st
   }
 }
 
+void RunManager::record_wall_time(store::Store& store, std::int64_t run_id,
+                                  const WallBreakdown& part) {
+  try {
+    // One attempt: a lost part costs the run's breakdown one process's share, never the
+    // run, and a shutdown does not wait out the retry budget for it.
+    store.add_wall_time(run_id, part, options_.owner);
+  } catch (const std::exception& e) {
+    report("run " + std::to_string(run_id) + ": its wall time (" + std::to_string(part.total_s) +
+           " s) was not recorded: " + e.what());
+  }
+}
+
 void RunManager::save_final_weights(store::Store& store, std::int64_t run_id,
                                     const TrainingOutcome& outcome, long long start_steps) {
   const rl::TrainingResult& result = outcome.result;
@@ -581,6 +593,7 @@ RunManager::Turn RunManager::train(store::Store& store, const store::RunRecord& 
       cancel_requested = active_->cancel_requested;
     }
     if (lost()) return Turn::kFinished;  // cancelled elsewhere or taken over
+    record_wall_time(store, run_id, outcome.result.breakdown);
     if (outcome.result.cancelled) {
       save_final_weights(store, run_id, outcome, start_steps);
       if (cancel_requested) return finish(store, run_id, store::RunState::kCancelled, "", shutdown);

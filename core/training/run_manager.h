@@ -144,6 +144,9 @@ class RunManager {
   void heartbeat(std::stop_token shutdown);
   Turn train(store::Store& store, const store::RunRecord& run, std::stop_token run_stop,
              const std::stop_token& shutdown);
+  // Adds the trainer's part of the run's wall time to the run's sums (reported, not thrown,
+  // if the store refuses it).
+  void record_wall_time(store::Store& store, std::int64_t run_id, const WallBreakdown& part);
   // Keeps the weights of a trainer stopped between evaluations (shutdown or cancel).
   void save_final_weights(store::Store& store, std::int64_t run_id, const TrainingOutcome& outcome,
                           long long start_steps);

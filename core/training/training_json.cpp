@@ -21,7 +21,7 @@ nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve) {
   return out;
 }
 
-nlohmann::json breakdown_json(const rl::WallBreakdown& b) {
+nlohmann::json breakdown_json(const WallBreakdown& b) {
   return {{"rollout_s", b.rollout_s}, {"update_s", b.update_s}, {"eval_s", b.eval_s},
           {"report_s", b.report_s},   {"other_s", b.other_s},   {"total_s", b.total_s}};
 }

@@ -10,7 +10,7 @@ namespace pnp::training {
 
 nlohmann::json curve_json(const std::vector<rl::CurvePoint>& curve);
 // {"rollout_s", "update_s", "eval_s", "report_s", "other_s", "total_s"}.
-nlohmann::json breakdown_json(const rl::WallBreakdown& breakdown);
+nlohmann::json breakdown_json(const WallBreakdown& breakdown);
 nlohmann::json result_json(const rl::TrainingResult& result);
 
 }  // namespace pnp::training

@@ -185,4 +185,24 @@ void to_proto(const sim::Action& a, common::v1::Action& out) {
   out.set_gripper(a(3));
 }
 
+void to_proto(const WallBreakdown& wall, common::v1::WallBreakdown& out) {
+  out.set_rollout_s(wall.rollout_s);
+  out.set_update_s(wall.update_s);
+  out.set_eval_s(wall.eval_s);
+  out.set_report_s(wall.report_s);
+  out.set_other_s(wall.other_s);
+  out.set_total_s(wall.total_s);
+}
+
+WallBreakdown from_proto(const common::v1::WallBreakdown& wall) {
+  WallBreakdown out;
+  out.rollout_s = wall.rollout_s();
+  out.update_s = wall.update_s();
+  out.eval_s = wall.eval_s();
+  out.report_s = wall.report_s();
+  out.other_s = wall.other_s();
+  out.total_s = out.rollout_s + out.update_s + out.eval_s + out.report_s + out.other_s;
+  return out;
+}
+
 }  // namespace pnp::services

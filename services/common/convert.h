@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/wall_breakdown.h"
 #include "pnp/common/v1/common.pb.h"
 #include "sim/actuation.h"
 #include "sim/object_shape.h"
@@ -42,5 +43,10 @@ sim::Goal from_proto(const common::v1::Vector3& v, std::string_view field);
 void to_proto(const sim::Observation& o, common::v1::Observation& out);
 void to_proto(const Eigen::Vector3d& v, common::v1::Vector3& out);
 void to_proto(const sim::Action& a, common::v1::Action& out);
+
+// As given: the store validates each phase (store::Store::add_wall_time); total_s is the
+// phases' sum, never read from a message.
+void to_proto(const WallBreakdown& wall, common::v1::WallBreakdown& out);
+WallBreakdown from_proto(const common::v1::WallBreakdown& wall);
 
 }  // namespace pnp::services

@@ -8,6 +8,7 @@
 #include "common/checksum.h"
 #include "common/error.h"
 #include "services/common/address.h"
+#include "services/common/convert.h"
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
 #include "services/store/store_convert.h"
@@ -143,6 +144,16 @@ bool RemoteStore::renew_lease(std::int64_t run_id, const std::string& owner,
   const auto response =
       call(&store_v1::StoreService::Stub::RenewLease, request, "store RenewLease");
   return response.renewed();
+}
+
+store::RunRecord RemoteStore::add_wall_time(std::int64_t run_id, const WallBreakdown& part,
+                                            const std::string& owner) {
+  store_v1::AddRunWallTimeRequest request;
+  request.set_run_id(run_id);
+  services::to_proto(part, *request.mutable_part());
+  request.set_owner(owner);
+  return from_proto(
+      call(&store_v1::StoreService::Stub::AddRunWallTime, request, "store AddRunWallTime").run());
 }
 
 void RemoteStore::release(std::int64_t run_id, const std::string& owner) {

@@ -57,6 +57,8 @@ class RemoteStore final : public store::Store {
                                              std::chrono::milliseconds lease) override;
   bool renew_lease(std::int64_t run_id, const std::string& owner,
                    std::chrono::milliseconds lease) override;
+  store::RunRecord add_wall_time(std::int64_t run_id, const WallBreakdown& part,
+                                 const std::string& owner = "") override;
   void release(std::int64_t run_id, const std::string& owner) override;
   std::int64_t count_claimable(const std::string& role, const std::string& owner) override;
 

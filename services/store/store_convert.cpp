@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "services/common/convert.h"
 
 namespace pnp::services {
 
@@ -48,6 +49,7 @@ void to_proto(const store::RunRecord& run, store_v1::Run& out) {
   if (run.steps_to_target) out.set_steps_to_target(*run.steps_to_target);
   out.set_owner(run.owner);
   if (run.lease_expires_ms) out.set_lease_expires_ms(*run.lease_expires_ms);
+  services::to_proto(run.wall, *out.mutable_wall());
 }
 
 store::RunRecord from_proto(const store_v1::Run& run) {
@@ -66,6 +68,7 @@ store::RunRecord from_proto(const store_v1::Run& run) {
   if (run.has_steps_to_target()) out.steps_to_target = run.steps_to_target();
   out.owner = run.owner();
   if (run.has_lease_expires_ms()) out.lease_expires_ms = run.lease_expires_ms();
+  out.wall = services::from_proto(run.wall());
   return out;
 }
 

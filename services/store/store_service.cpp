@@ -9,6 +9,7 @@
 #include "common/checksum.h"
 #include "common/error.h"
 #include "services/common/access_control.h"
+#include "services/common/convert.h"
 #include "services/common/status.h"
 #include "services/store/checkpoint_chunks.h"
 #include "services/store/import_spool.h"
@@ -176,6 +177,18 @@ grpc::Status StoreServiceImpl::ReleaseRun(grpc::ServerContext* context,
                                           store_v1::ReleaseRunResponse*) {
   return guarded([&] {
     connections_.borrow()->release(request->run_id(), owner_of(*context, request->owner()));
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status StoreServiceImpl::AddRunWallTime(grpc::ServerContext* context,
+                                              const store_v1::AddRunWallTimeRequest* request,
+                                              store_v1::RunResponse* response) {
+  return guarded([&] {
+    to_proto(connections_.borrow()->add_wall_time(request->run_id(),
+                                                  services::from_proto(request->part()),
+                                                  owner_of(*context, request->owner())),
+             *response->mutable_run());
     return grpc::Status::OK;
   });
 }

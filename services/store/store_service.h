@@ -61,6 +61,8 @@ class StoreServiceImpl final : public store_v1::StoreService::Service {
                           store_v1::RenewLeaseResponse*) override;
   grpc::Status ReleaseRun(grpc::ServerContext*, const store_v1::ReleaseRunRequest*,
                           store_v1::ReleaseRunResponse*) override;
+  grpc::Status AddRunWallTime(grpc::ServerContext*, const store_v1::AddRunWallTimeRequest*,
+                              store_v1::RunResponse*) override;
   grpc::Status CountClaimable(grpc::ServerContext*, const store_v1::CountClaimableRequest*,
                               store_v1::CountClaimableResponse*) override;
   grpc::Status RecordMetric(grpc::ServerContext*, const store_v1::RecordMetricRequest*,

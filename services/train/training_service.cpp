@@ -56,6 +56,7 @@ void TrainingServiceImpl::fill(const store::RunRecord& run, TrainingRun& out) {
   const auto checkpoints = manager_.checkpoints(run.id);
   out.set_latest_checkpoint_id(checkpoints.empty() ? 0 : checkpoints.back().id);
   out.set_error(run.error);
+  to_proto(run.wall, *out.mutable_wall_breakdown());
   set_millis(run.created_ms, *out.mutable_create_time());
   set_millis(run.updated_ms, *out.mutable_update_time());
   if (run.finished_ms) set_millis(*run.finished_ms, *out.mutable_finish_time());

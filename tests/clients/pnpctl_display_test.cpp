@@ -54,6 +54,21 @@ TEST(PnpctlDisplay, ARunStoredBeforeTheScoreWasKeptShowsNoScore) {
   EXPECT_EQ(score_text(finished_run(true)), "0.70");
 }
 
+TEST(PnpctlDisplay, TheWallColumnsShowTheTotalAndEachMainPhasesShare) {
+  auto run = finished_run(true);
+  EXPECT_EQ(wall_columns(run), (std::vector<std::string>{"-", "-", "-", "-"}))
+      << "no part of the run has ended";
+  auto& wall = *run.mutable_wall_breakdown();
+  wall.set_rollout_s(6.5);
+  wall.set_update_s(29.0);
+  wall.set_eval_s(27.0);
+  wall.set_report_s(1.0);
+  wall.set_other_s(1.5);
+  wall.set_total_s(65.0);
+  EXPECT_EQ(wall_columns(run), (std::vector<std::string>{"1m05s", "10%", "45%", "42%"}));
+  EXPECT_EQ(wall_columns(run).size(), kWallColumnNames.size());
+}
+
 TEST(PnpctlDisplay, ALegendEntryNamesRoleAlgorithmSeedAndRun) {
   EXPECT_EQ(series_label(finished_run(true)), "approach ddpg_her seed 1 (run 3)");
 }

@@ -230,6 +230,56 @@ TEST_P(StoreContract, AClaimGivesARunToOneOwnerUntilItsLeaseExpires) {
   EXPECT_EQ(a.claim_next("approach", "server-a", 60s)->id, first.id);
 }
 
+TEST_P(StoreContract, EachTrainersPartOfTheWallTimeAddsToTheRunsSums) {
+  auto s = open();
+  Store& store = *s;
+  const auto run = store.create_run(spec());
+  EXPECT_EQ(run.wall, WallBreakdown{}) << "zero until a part ends";
+  ASSERT_TRUE(store.claim_next("approach", "server-a", 60s));
+  const WallBreakdown first{.rollout_s = 1.5,
+                            .update_s = 6.0,
+                            .eval_s = 2.0,
+                            .report_s = 0.25,
+                            .other_s = 0.25,
+                            .total_s = 10.0};
+  EXPECT_EQ(store.add_wall_time(run.id, first, "server-a").wall, first);
+  // A resumed run's next part adds to the sums; total_s is the phases' sum, never taken
+  // from the caller.
+  WallBreakdown second{.rollout_s = 0.5,
+                       .update_s = 1.0,
+                       .eval_s = 1.0,
+                       .report_s = 0,
+                       .other_s = 0.5,
+                       .total_s = 99};
+  store.add_wall_time(run.id, second, "server-a");
+  const WallBreakdown sum = store.get_run(run.id).wall;
+  EXPECT_DOUBLE_EQ(sum.rollout_s, 2.0);
+  EXPECT_DOUBLE_EQ(sum.update_s, 7.0);
+  EXPECT_DOUBLE_EQ(sum.eval_s, 3.0);
+  EXPECT_DOUBLE_EQ(sum.report_s, 0.25);
+  EXPECT_DOUBLE_EQ(sum.other_s, 0.75);
+  EXPECT_DOUBLE_EQ(sum.total_s, 13.0);
+
+  // Refused, and nothing added: a phase out of range (named), another owner, a finished run.
+  for (const double bad : {-1.0, std::nan(""), 2e7}) {
+    WallBreakdown wrong = second;
+    wrong.eval_s = bad;
+    try {
+      store.add_wall_time(run.id, wrong, "server-a");
+      ADD_FAILURE() << "eval_s " << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("wall.eval_s"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(code_of([&] { store.add_wall_time(run.id, second, "server-b"); }), ErrorCode::kAborted);
+  store.set_state(run.id, RunState::kCancelled);
+  EXPECT_EQ(code_of([&] { store.add_wall_time(run.id, second, "server-a"); }),
+            ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(code_of([&] { store.add_wall_time(run.id, second); }), ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(store.get_run(run.id).wall, sum);
+}
+
 TEST_P(StoreContract, TheLatestCheckpointIsTheOneWithTheMostSteps) {
   auto s = open();
   Store& store = *s;

@@ -47,6 +47,10 @@ def run_record(run) -> dict:
         "create_time": _seconds(run.create_time),
         "update_time": _seconds(run.update_time),
         "finish_time": _seconds(run.finish_time),
+        "wall_breakdown": {
+            phase: getattr(run.wall_breakdown, phase)
+            for phase in ("rollout_s", "update_s", "eval_s", "report_s", "other_s", "total_s")
+        },
     }
 
 

@@ -55,6 +55,7 @@ TEST_F(StoreTest, AnOlderDatabaseIsMigratedWithItsRowsAndIdsAreNeverReused) {
   EXPECT_EQ(store.database().pragma_int("user_version"), schema_version());
   EXPECT_EQ(store.get_run(old_run).state, RunState::kRunning);
   EXPECT_TRUE(store.get_run(old_run).owner.empty());
+  EXPECT_EQ(store.get_run(old_run).wall, WallBreakdown{}) << "no part recorded before it was kept";
   EXPECT_EQ(store.checkpoint_info(old_checkpoint).run_id, old_run);
   EXPECT_EQ(store.promoted("approach")->checkpoint_id, old_checkpoint);
   auto fk = store.database().prepare("PRAGMA foreign_key_check");

@@ -203,6 +203,7 @@ TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
   const std::string db = dir.file("pnp.db");
   std::int64_t id = 0;
   std::vector<store::MetricPoint> before;
+  WallBreakdown first_part;
   {
     RunManager first({db, "approach", "test", 1});
     id = first.create(small_spec("approach", 1200), {}).id;
@@ -212,7 +213,11 @@ TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
     store::RunStore store(db);
     EXPECT_EQ(store.get_run(id).state, store::RunState::kRunning);
     before = store.metrics(id);
+    first_part = store.get_run(id).wall;
   }
+  // The part that shut down recorded where its time went: two evaluations at least.
+  EXPECT_GT(first_part.eval_s, 0);
+  EXPECT_GT(first_part.update_s, 0);
   ASSERT_GE(before.size(), 2u);
   RunManager second({db, "approach", "test", 1});
   wait_until(second, [&] { return store::is_terminal(second.get(id).state); });
@@ -229,6 +234,12 @@ TEST(RunManager, AShutdownLeavesTheRunToResumeFromItsLastCheckpoint) {
   EXPECT_GE(after.back().env_steps, 1200);
   // It continued from its last checkpoint, not from scratch: episodes keep counting.
   EXPECT_GT(after[before.size()].episodes, before.back().episodes);
+  // The run's wall time is both parts': the second part's added to the first's.
+  const WallBreakdown& wall = run.wall;
+  EXPECT_GT(wall.eval_s, first_part.eval_s);
+  EXPECT_GT(wall.rollout_s, first_part.rollout_s);
+  EXPECT_NEAR(wall.total_s,
+              wall.rollout_s + wall.update_s + wall.eval_s + wall.report_s + wall.other_s, 1e-9);
 }
 
 TEST(RunManager, AShutdownOrACancelBetweenEvaluationsKeepsTheTrainersFinalWeights) {
