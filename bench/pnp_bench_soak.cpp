@@ -365,7 +365,7 @@ nlohmann::json soak(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pnp-bench-soak: the platform under a long mixed load; errors, latency, RSS"};
+  CLI::App app{"The platform under a long mixed load: errors, latency, RSS", "pnp-bench-soak"};
   Options o;
   app.add_option("--minutes", o.minutes, "how long the load runs")
       ->capture_default_str()
@@ -383,11 +383,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--bin-dir", o.bin_dir, "where the server binaries are")->capture_default_str();
-  bool ok = false;
+  bool failed = false;  // the soak ran and broke one of its rules (not --help or --version)
   const int rc = tools::run_tool(app, argc, argv, [&] {
     const auto result = soak(o);
     std::cout << result.dump(2) << std::endl;
-    ok = result["ok"].get<bool>();
+    failed = !result["ok"].get<bool>();
   });
-  return rc != 0 ? rc : (ok ? 0 : 1);
+  return rc != 0 ? rc : (failed ? 1 : 0);
 }

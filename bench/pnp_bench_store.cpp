@@ -188,7 +188,7 @@ Pass write_run(const std::filesystem::path& db, store::Sync sync,
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pnp-bench-store: the cost of durable commits and the saving of retention"};
+  CLI::App app{"The cost of durable commits and the saving of retention", "pnp-bench-store"};
   int evaluations = 200;
   long long interval = 1000;
   std::size_t blob_bytes = 1'100'000;

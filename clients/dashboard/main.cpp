@@ -8,6 +8,7 @@
 
 #include "clients/dashboard/dashboard_server.h"
 #include "common/error.h"
+#include "common/version.h"
 #include "security/auth_policy.h"
 #include "services/common/address.h"
 #include "services/common/endpoints_file.h"
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
                  "request is closed then")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   config.guard.answer_deadline =
       std::chrono::milliseconds(static_cast<long long>(deadline_s * 1000));

@@ -12,6 +12,7 @@
 #include "clients/pnpctl/endpoints.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
+#include "common/version.h"
 #include "services/common/cli_suggestion.h"
 #include "services/common/client_logging.h"
 #include "store/run_store.h"
@@ -351,6 +352,7 @@ int main(int argc, char** argv) {
   robot_resume->callback(
       [&] { command = [&] { return robot_resume_command(endpoints, ack, operator_name); }; });
 
+  pnp::add_version_flag(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

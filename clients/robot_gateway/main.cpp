@@ -33,6 +33,7 @@
 #include "clients/robot_gateway/target_record.h"
 #include "common/error.h"
 #include "common/seed_flag.h"
+#include "common/version.h"
 #include "services/common/address.h"
 #include "services/common/client_logging.h"
 #include "services/common/endpoints_file.h"
@@ -125,6 +126,7 @@ int main(int argc, char** argv) {
                "allow /metrics (plaintext HTTP, read-only counters) on a non-loopback address");
   services::ClientTlsFiles tls;  // the controller's and the inference service's
   services::add_client_security_flags(app, tls);
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   try {
     if (episodes < 1) {

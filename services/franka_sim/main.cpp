@@ -16,6 +16,7 @@
 
 #include "arm_sim/franka_stand_in.h"
 #include "common/error.h"
+#include "common/version.h"
 #include "services/common/server_runtime.h"
 #include "services/franka_ros/ros_node.h"
 #include "services/franka_sim/franka_sim_scene_service.h"
@@ -115,6 +116,7 @@ int main(int argc, char** argv) {
   app.add_option("--control", topics.control, "namespace of the test controls")
       ->capture_default_str();
   app.add_option("--base-frame", topics.base_frame, "the arm's base frame")->capture_default_str();
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   try {
     options.object = pnp::sim::parse_object(object, "--object");

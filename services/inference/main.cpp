@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/version.h"
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
   StreamLimitOptions limit_options;
   double idle_timeout_s = 0;
   add_stream_limit_flags(app, limit_options, idle_timeout_s);
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   try {
     // Refuses a bad PNP_GEMM before serving; the path is logged with "listening".

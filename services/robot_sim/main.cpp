@@ -14,6 +14,7 @@
 
 #include "arm_sim/simulated_arm.h"
 #include "common/error.h"
+#include "common/version.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
 #include "services/common/server_runtime.h"
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
   StreamLimitOptions limit_options;
   double idle_timeout_s = 0;
   add_stream_limit_flags(app, limit_options, idle_timeout_s);
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   try {
     ServerSecurity security = load_server_security(security_flags, address, metrics_address);

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/version.h"
 #include "rl/checkpoint_probe.h"
 #include "services/common/address.h"
 #include "services/common/metrics_registry.h"
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
                  "--max-checkpoint-mb: one principal holds at most half)")
       ->check(CLI::Range(1LL, 1LL << 20))
       ->capture_default_str();
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   quotas.max_checkpoint_bytes = checkpoint_mb << 20;
   quotas.max_run_checkpoint_bytes = run_mb << 20;

@@ -20,6 +20,7 @@
 #include "clients/sim_client/remote_env_factory.h"
 #include "clients/sim_client/sim_target.h"
 #include "common/error.h"
+#include "common/version.h"
 #include "nn/gemm_path.h"
 #include "services/common/metrics_registry.h"
 #include "services/common/security_flags.h"
@@ -121,6 +122,7 @@ int main(int argc, char** argv) {
   StreamLimitOptions limit_options;
   double idle_timeout_s = 0;
   add_stream_limit_flags(app, limit_options, idle_timeout_s);
+  pnp::add_version_flag(app);
   CLI11_PARSE(app, argc, argv);
   const auto port = default_ports.find(role);
   if (port == default_ports.end()) {

@@ -10,10 +10,12 @@
 #include <system_error>
 
 #include "common/error.h"
+#include "common/version.h"
 
 namespace pnp::tools {
 
 int run_tool(CLI::App& app, int argc, char** argv, const std::function<void()>& body) {
+  add_version_flag(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -8,7 +8,8 @@
 
 namespace pnp::tools {
 
-// Exit codes: 0 success, 2 bad usage or input, 1 any other failure.
+// Adds --version (common/version.h), parses, runs `body`. Exit codes: 0 success (and
+// --help, --version), 2 bad usage or input, 1 any other failure.
 int run_tool(CLI::App& app, int argc, char** argv, const std::function<void()>& body);
 
 // Creates `dir` if needed and checks a file can be written in it, before any long work:
