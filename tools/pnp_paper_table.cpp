@@ -6,6 +6,7 @@
 // OUT/results/learning_curves.svg (OUT: runs/paper-table). --grid runs every world x
 // every preset, one such directory per cell, and a summary page.
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -226,7 +227,8 @@ int main(int argc, char** argv) {
                              p.uses_demonstrations,
                              {},
                              {},
-                             {}};
+                             {},
+                             0.0};
         cell.results_path = cell.world + "-" + cell.preset + "/RESULTS.md";
         tools::ExperimentSettings cell_settings = tools::preset_settings(p, cell_world);
         apply_caps(cell_settings, p);
@@ -235,10 +237,15 @@ int main(int argc, char** argv) {
         tools::ReportContext cell_context = context;
         cell_context.preset = cell.preset;
         cell_context.uses_demonstrations = p.uses_demonstrations;
+        const auto cell_start = std::chrono::steady_clock::now();
         tools::TableResult result =
             tools::run_table(plan, cell_context, out / (cell.world + "-" + cell.preset), progress);
         cell.runs = std::move(result.runs);
         cell.panda = std::move(result.panda);
+        cell.wall_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - cell_start).count();
+        std::fprintf(stderr, "cell %s/%s: %.1f s\n", cell.world.c_str(), cell.preset.c_str(),
+                     cell.wall_s);
         cells.push_back(std::move(cell));
         context.settings = cell_settings;
         write_text(out / "RESULTS.md", tools::grid_markdown(cells, context));

@@ -22,6 +22,15 @@ struct WallBreakdown {
   double other_s = 0;
   double total_s = 0;  // the phases' sum
 
+  WallBreakdown& operator+=(const WallBreakdown& more) {
+    rollout_s += more.rollout_s;
+    update_s += more.update_s;
+    eval_s += more.eval_s;
+    report_s += more.report_s;
+    other_s += more.other_s;
+    total_s += more.total_s;
+    return *this;
+  }
   bool operator==(const WallBreakdown&) const = default;
 };
 

@@ -216,6 +216,32 @@ std::string held_out_cell(const std::vector<MethodRun>& runs) {
 
 }  // namespace
 
+WallBreakdown training_phases(const GridCell& cell) {
+  WallBreakdown sum;
+  const auto add = [&](const MethodRun& run) {
+    for (const RoleRun& part : run.roles) sum += part.result.breakdown;
+  };
+  for (const MethodRun& run : cell.runs) add(run);
+  if (cell.panda) add(*cell.panda);
+  return sum;
+}
+
+namespace {
+
+std::string minutes_text(double seconds) {
+  return fmt::format("{:.1f} min", seconds / 60);
+}
+
+// "62.3 min (eval 38%)": the cell's wall time and its trainers' evaluation share of it.
+std::string cell_wall_text(const GridCell& cell) {
+  const WallBreakdown phases = training_phases(cell);
+  std::string text = minutes_text(cell.wall_s);
+  if (cell.wall_s > 0) text += fmt::format(" (eval {:.0f}%)", 100 * phases.eval_s / cell.wall_s);
+  return text;
+}
+
+}  // namespace
+
 std::string grid_markdown(const std::vector<GridCell>& cells, const ReportContext& c) {
   std::string md = "# Results: Table I over worlds and presets\n\n";
   md += fmt::format(
@@ -227,18 +253,27 @@ std::string grid_markdown(const std::vector<GridCell>& cells, const ReportContex
       c.command, c.code_commit, c.gemm_path, c.settings.held_out_episodes);
   md +=
       "| world | preset | demonstrations | DDPG+HER experts + HLC | held-out (fetch) | held-out "
-      "(panda) | BC experts (original networks) + HLC | BC experts + HLC | end-to-end | cell "
-      "|\n|---|---|---|---|---|---|---|---|---|---|\n";
+      "(panda) | BC experts (original networks) + HLC | BC experts + HLC | end-to-end | wall | "
+      "cell |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  double grid_s = 0;
   for (const GridCell& cell : cells) {
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | [RESULTS.md]({}) |\n",
+    grid_s += cell.wall_s;
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | [RESULTS.md]({}) |\n",
                       cell.world, cell.preset, cell.uses_demonstrations ? "**yes**" : "no",
                       total_steps_cell(cell.runs, "ddpg_her"), held_out_cell(cell.runs),
                       cell.panda && cell.panda->held_out_success >= 0
                           ? fmt::format("{:.3f}", cell.panda->held_out_success)
                           : std::string("-"),
                       total_steps_cell(cell.runs, "bc_original"), total_steps_cell(cell.runs, "bc"),
-                      total_steps_cell(cell.runs, "e2e"), cell.results_path);
+                      total_steps_cell(cell.runs, "e2e"), cell_wall_text(cell), cell.results_path);
   }
+  md += fmt::format(
+      "\nThe {} cells took {} of wall time, one after the other, on {} (each cell's trainers "
+      "use every thread they are given); a cell's evaluation share is its trainers' stop-rule "
+      "evaluations.\n",
+      cells.size(), minutes_text(grid_s),
+      c.settings.threads == 0 ? std::string("every hardware thread")
+                              : fmt::format("{} thread(s)", c.settings.threads));
   md +=
       "\nThe paper (Table I, its patched FetchPickAndPlace, no demonstrations): DDPG+HER "
       "experts + HLC 316k, BC experts + HLC 470k, end-to-end 1.4M.\n";

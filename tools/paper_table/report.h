@@ -33,9 +33,13 @@ struct GridCell {
   std::string results_path;  // the cell's RESULTS.md, relative to the grid's
   std::vector<MethodRun> runs;
   std::optional<MethodRun> panda;
+  double wall_s = 0;  // the whole cell: training, evaluation, held-out episodes, reports
 };
-// The matrix on one page: per cell, each method's total steps (mean ± sd, k/n reached)
-// and the DDPG+HER hierarchies' held-out success.
+// The cell's trainers' wall time by phase, summed over its runs and their parts.
+WallBreakdown training_phases(const GridCell& cell);
+// The matrix on one page: per cell, each method's total steps (mean ± sd, k/n reached),
+// the DDPG+HER hierarchies' held-out success, and the cell's wall time with its trainers'
+// evaluation share; then the whole grid's time.
 std::string grid_markdown(const std::vector<GridCell>& cells, const ReportContext& context);
 std::string curves_csv(const std::vector<MethodRun>& runs);
 std::string curves_svg(const std::vector<MethodRun>& runs);
