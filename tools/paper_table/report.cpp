@@ -46,18 +46,25 @@ std::vector<const MethodRun*> of_method(const std::vector<MethodRun>& runs,
 
 struct MethodTotals {
   Stats steps, wall;
+  Stats eval_steps;   // every step of the stop rule's evaluation episodes
+  Stats interaction;  // training and evaluation steps together
 };
 
 // Total steps and wall time of a method's runs, over seeds.
 MethodTotals method_totals(const std::vector<const MethodRun*>& runs) {
-  std::vector<double> totals, walls;
+  std::vector<double> totals, walls, evals, interactions;
   int reached = 0;
   for (const MethodRun* r : runs) {
+    long long eval_steps = 0;
+    for (const RoleRun& part : r->roles) eval_steps += part.result.eval_env_steps;
     totals.push_back(static_cast<double>(r->total_steps));
     walls.push_back(r->total_wall_s);
+    evals.push_back(static_cast<double>(eval_steps));
+    interactions.push_back(static_cast<double>(r->total_steps + eval_steps));
     reached += r->reached ? 1 : 0;
   }
-  return {stats(totals, reached), stats(walls, reached)};
+  return {stats(totals, reached), stats(walls, reached), stats(evals, reached),
+          stats(interactions, reached)};
 }
 
 Stats role_steps(const std::vector<const MethodRun*>& runs, const std::string& role) {
@@ -90,9 +97,11 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
       "robot, `{}` "
       "object. Every "
       "training environment "
-      "step counts, scripted prefixes and demonstrations included; evaluation episodes (fresh, "
-      "seeded, never "
-      "trained on) are not counted. Target for the whole task (choreographer, end-to-end): task "
+      "step counts, scripted prefixes and demonstrations included. Evaluation episodes (fresh, "
+      "seeded, never trained on) are counted beside them: \"evaluation steps\" is every step "
+      "of the stop rule's evaluation episodes until the run stopped, and \"all interaction\" "
+      "adds them to the training steps (the held-out episodes after training are not in it). "
+      "Target for the whole task (choreographer, end-to-end): task "
       "success >= {:.0f}% on {} evaluation episodes ({}), "
       "twice in a row "
       "(steps to target = training steps at the second of the two: the model that goes on). Wall "
@@ -144,22 +153,21 @@ std::string results_markdown(const std::vector<MethodRun>& runs, const ReportCon
   md += "## Steps and time to the target\n\n";
   md +=
       "| method | LSE1 approach | LSE2 manipulate | LSE3 retract | HLC | total steps | total time "
-      "|\n";
-  md += "|---|---|---|---|---|---|---|\n";
+      "| evaluation steps | all interaction |\n";
+  md += "|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string method : {"e2e", "bc_original", "bc", "ddpg_her"}) {
     const auto rs = of_method(runs, method);
     if (rs.empty()) continue;
-    const auto [total, wall] = method_totals(rs);
-    if (method == "e2e") {
-      md += fmt::format("| {} | - | - | - | - | {} | {:.0f} s ± {:.0f} s |\n", method_label(method),
-                        steps_cell(total), wall.mean, wall.sd);
-      continue;
-    }
-    md +=
-        fmt::format("| {} | {} | {} | {} | {} | {} | {:.0f} s ± {:.0f} s |\n", method_label(method),
-                    steps_cell(role_steps(rs, "approach")),
-                    steps_cell(role_steps(rs, "manipulate")), steps_cell(role_steps(rs, "retract")),
-                    steps_cell(role_steps(rs, "hlc")), steps_cell(total), wall.mean, wall.sd);
+    const MethodTotals t = method_totals(rs);
+    const std::string parts =
+        method == "e2e"
+            ? std::string("- | - | - | -")
+            : fmt::format("{} | {} | {} | {}", steps_cell(role_steps(rs, "approach")),
+                          steps_cell(role_steps(rs, "manipulate")),
+                          steps_cell(role_steps(rs, "retract")), steps_cell(role_steps(rs, "hlc")));
+    md += fmt::format("| {} | {} | {} | {:.0f} s ± {:.0f} s | {} | {} |\n", method_label(method),
+                      parts, steps_cell(t.steps), t.wall.mean, t.wall.sd, steps_cell(t.eval_steps),
+                      steps_cell(t.interaction));
   }
   md +=
       "\nA cell marked (k/n reached) counts, for the runs that did not reach the target, every "
