@@ -35,8 +35,8 @@ struct GatewayCellSpec {
   double acceleration_scale = arm_sim::kDefaultAccelerationScale;  // x the Panda's datasheet
 };
 
-// The gateway's summary (gateway/gateway_summary.h) plus gateway_errors (episodes ended by
-// a refused reading, with their reasons), solved_at_start (successes at step 0: scenes
+// The gateway's summary (clients/robot_gateway/gateway_summary.h) plus gateway_errors (episodes
+// ended by a refused reading, with their reasons), solved_at_start (successes at step 0: scenes
 // that start with the object within the success distance), wall_s, and arm_world: the
 // same scenes played by the same served policy in the arm-actuated world (success at the
 // episode's end and at any step, and the scenes where the gateway disagrees with the world).

@@ -1,7 +1,7 @@
 #pragma once
 // The platform's store, as every server sees it: training runs, their learning curves,
 // their checkpoints and the promoted checkpoint of each role. Two implementations keep
-// the same contract (tests/core/store/store_contract.h runs one suite against both):
+// the same contract (tests/store_contract/store_contract.h runs one suite against both):
 //   RunStore      the SQLite file in this process (store/run_store.h), for one machine;
 //   RemoteStore   a client of pnp-store-server, the one process that opens the file
 //                 (services/store/remote_store.h), for servers on other machines.
