@@ -26,6 +26,36 @@ auto parse_meta(const nlohmann::json& j, Parse parse) {
   }
 }
 
+// What every policy checkpoint records beside its network: the world it trained in (robot,
+// object, profile, actuation) and its provenance (steps, evaluated success, seed, commit,
+// GEMM path). Written and read here only, so the two kinds cannot drift apart. A field
+// missing from an older file keeps `out`'s default (its Meta type says what files before
+// the field held).
+template <typename Meta>
+void write_provenance(const Meta& meta, nlohmann::json& j) {
+  j["robot"] = meta.robot;
+  j["object"] = meta.object;
+  j["world"] = meta.world;
+  j["actuation"] = meta.actuation;
+  j["train_env_steps"] = meta.train_env_steps;
+  j["eval_success"] = meta.eval_success;
+  j["seed"] = meta.seed;
+  j["code_commit"] = meta.code_commit;
+  j["gemm_path"] = meta.gemm_path;
+}
+template <typename Meta>
+void read_provenance(const nlohmann::json& m, Meta& out) {
+  out.robot = m.at("robot");
+  out.object = m.at("object");
+  out.world = m.value("world", out.world);
+  out.actuation = m.value("actuation", out.actuation);
+  out.train_env_steps = m.at("train_env_steps");
+  out.eval_success = m.at("eval_success");
+  out.seed = m.at("seed");
+  out.code_commit = m.value("code_commit", out.code_commit);
+  out.gemm_path = m.value("gemm_path", out.gemm_path);
+}
+
 // DATA_LOSS unless section `name` holds exactly `count` floats: checked before the network
 // it fills is allocated.
 void require_float_section(const nn::CheckpointReader& r, const std::string& name,

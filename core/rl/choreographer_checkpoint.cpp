@@ -20,21 +20,13 @@ std::string block_name(std::size_t index) {
 }  // namespace
 
 std::vector<std::uint8_t> save_choreographer(const ChoreographerMeta& meta, ChoreographerNet& net) {
-  const nlohmann::json j = {{"kind", kKind},
-                            {"robot", meta.robot},
-                            {"object", meta.object},
-                            {"world", meta.world},
-                            {"actuation", meta.actuation},
-                            {"trunk", meta.network.trunk},
-                            {"lstm", meta.network.lstm},
-                            {"predicate_inputs", meta.network.predicate_inputs},
-                            {"mask_finished", meta.network.mask_finished},
-                            {"chain_prior", meta.network.chain_prior},
-                            {"train_env_steps", meta.train_env_steps},
-                            {"eval_success", meta.eval_success},
-                            {"seed", meta.seed},
-                            {"code_commit", meta.code_commit},
-                            {"gemm_path", meta.gemm_path}};
+  nlohmann::json j = {{"kind", kKind},
+                      {"trunk", meta.network.trunk},
+                      {"lstm", meta.network.lstm},
+                      {"predicate_inputs", meta.network.predicate_inputs},
+                      {"mask_finished", meta.network.mask_finished},
+                      {"chain_prior", meta.network.chain_prior}};
+  write_provenance(meta, j);
   nn::CheckpointWriter w;
   write_meta(w, j);
   const auto blocks = net.parameter_blocks();
@@ -48,21 +40,13 @@ LoadedChoreographer load_choreographer(std::span<const std::uint8_t> bytes) {
   const nlohmann::json j = read_meta(r, kKind);
   ChoreographerMeta meta = parse_meta(j, [](const nlohmann::json& m) {
     ChoreographerMeta out;
-    out.robot = m.at("robot");
-    out.object = m.at("object");
-    out.world = m.value("world", "paper");
-    out.actuation = m.value("actuation", "mocap");
+    read_provenance(m, out);
     out.network.trunk = m.at("trunk").get<std::vector<int>>();
     out.network.lstm = m.at("lstm");
     // Checkpoints written before these became options had both.
     out.network.predicate_inputs = m.value("predicate_inputs", true);
     out.network.mask_finished = m.value("mask_finished", true);
     out.network.chain_prior = m.value("chain_prior", 0.0);  // none before it existed
-    out.train_env_steps = m.at("train_env_steps");
-    out.eval_success = m.at("eval_success");
-    out.seed = m.at("seed");
-    out.code_commit = m.value("code_commit", "");
-    out.gemm_path = m.value("gemm_path", "");
     return out;
   });
   if (meta.network.trunk.empty() || meta.network.lstm <= 0) {

@@ -19,14 +19,10 @@ constexpr const char* kKind = "subtask_expert";
 std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& actor,
                                       const nn::Mlp* critic, const nn::Normalizer& obs_norm,
                                       const nn::Normalizer& goal_norm) {
-  const nlohmann::json j = {
+  nlohmann::json j = {
       {"kind", kKind},
       {"role", meta.role},
       {"algorithm", meta.algorithm},
-      {"robot", meta.robot},
-      {"object", meta.object},
-      {"world", meta.world},
-      {"actuation", meta.actuation},
       {"gripper_script", meta.gripper_script},
       {"hidden", meta.hidden},
       {"hidden_activation", std::string(nn::activation_name(meta.hidden_activation))},
@@ -34,12 +30,8 @@ std::vector<std::uint8_t> save_expert(const ExpertMeta& meta, const nn::Mlp& act
       {"clip_obs", meta.clip_obs},
       {"norm_clip", meta.norm_clip},
       {"norm_std_floor", meta.norm_std_floor},
-      {"train_env_steps", meta.train_env_steps},
-      {"eval_success", meta.eval_success},
-      {"seed", meta.seed},
-      {"code_commit", meta.code_commit},
-      {"gemm_path", meta.gemm_path},
       {"has_critic", critic != nullptr}};
+  write_provenance(meta, j);
   nn::CheckpointWriter w;
   write_meta(w, j);
   w.add_floats("actor", actor.params());
@@ -61,10 +53,7 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     ExpertMeta out;
     out.role = m.at("role");
     out.algorithm = m.at("algorithm");
-    out.robot = m.at("robot");
-    out.object = m.at("object");
-    out.world = m.value("world", "paper");
-    out.actuation = m.value("actuation", "mocap");
+    read_provenance(m, out);
     out.gripper_script = m.value("gripper_script", "grasp_rule");
     sim::parse_gripper_script(out.gripper_script, "checkpoint gripper_script");
     out.hidden = m.at("hidden").get<std::vector<int>>();
@@ -78,11 +67,6 @@ LoadedExpert load_expert(std::span<const std::uint8_t> bytes) {
     out.clip_obs = m.at("clip_obs");
     out.norm_clip = m.at("norm_clip");
     out.norm_std_floor = m.at("norm_std_floor");
-    out.train_env_steps = m.at("train_env_steps");
-    out.eval_success = m.at("eval_success");
-    out.seed = m.at("seed");
-    out.code_commit = m.value("code_commit", "");
-    out.gemm_path = m.value("gemm_path", "");
     return out;
   });
   // Bounded, and each section's size checked, before anything is allocated: the file's own

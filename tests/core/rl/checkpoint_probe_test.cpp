@@ -6,6 +6,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <tuple>
 
 #include "common/error.h"
 #include "nn/checkpoint_io.h"
@@ -109,6 +110,44 @@ TEST(CheckpointProbe, HugeWidthsInTheMetadataAreRefusedBeforeAllocating) {
                 {"block0", "norm.sum", "norm.sumsq", "norm.count"});
   EXPECT_EQ(code_of([&] { load_choreographer(numbered); }, &message), ErrorCode::kInvalidArgument);
   EXPECT_EQ(message, "checkpoint kind: expected choreographer, got 32");
+}
+
+// Both kinds read the world and provenance fields through one parser: a file written before
+// a field was kept gets what files before it held, and a field every file has is required.
+TEST(CheckpointProbe, AnOlderFilesMissingFieldsTakeWhatFilesBeforeThemHeld) {
+  const auto forget = [](nlohmann::json& m) {
+    for (const char* field : {"world", "actuation", "code_commit", "gemm_path"}) m.erase(field);
+  };
+  const LoadedExpert expert =
+      load_expert(with_meta(expert_blob("approach"), "subtask_expert", forget, kExpertSections));
+  const auto chor_blob = choreographer_blob();
+  std::vector<std::string> chor_sections{"norm.sum", "norm.sumsq", "norm.count"};
+  for (int b = 0; nn::CheckpointReader(chor_blob).has("block" + std::to_string(b)); ++b)
+    chor_sections.push_back("block" + std::to_string(b));
+  const LoadedChoreographer chor =
+      load_choreographer(with_meta(chor_blob, "choreographer", forget, chor_sections));
+  for (const auto& [world, actuation, commit, gemm] :
+       {std::tuple(expert.meta.world, expert.meta.actuation, expert.meta.code_commit,
+                   expert.meta.gemm_path),
+        std::tuple(chor.meta.world, chor.meta.actuation, chor.meta.code_commit,
+                   chor.meta.gemm_path)}) {
+    EXPECT_EQ(world, "paper");
+    EXPECT_EQ(actuation, "mocap");
+    EXPECT_EQ(commit, "");
+    EXPECT_EQ(gemm, "");
+  }
+  EXPECT_EQ(chor.meta.seed, 4u) << "the rest as written";
+  EXPECT_EQ(chor.meta.robot, "fetch");
+  const auto no_seed = [](nlohmann::json& m) { m.erase("seed"); };
+  EXPECT_EQ(code_of([&] {
+              load_choreographer(with_meta(chor_blob, "choreographer", no_seed, chor_sections));
+            }),
+            ErrorCode::kDataLoss);
+  EXPECT_EQ(
+      code_of([&] {
+        load_expert(with_meta(expert_blob("approach"), "subtask_expert", no_seed, kExpertSections));
+      }),
+      ErrorCode::kDataLoss);
 }
 
 // Widths within bounds but not those the sections hold: DATA_LOSS from the sizes alone.
