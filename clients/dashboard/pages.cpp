@@ -45,6 +45,24 @@ std::string percent(double fraction) {
   return fmt::format("{:.1f}%", 100 * fraction);
 }
 
+// Where a run's wall time went, by phase: the parts of it that have ended (the store sums a
+// run's parts as each trainer stops).
+std::string wall_breakdown_html(const WallBreakdown& w) {
+  if (!(w.total_s > 0)) {
+    return "<p id=\"wall-breakdown\">Where its time went: nothing recorded yet (each trainer "
+           "records its part as it stops).</p>\n";
+  }
+  const auto phase = [&](const char* name, double seconds) {
+    return fmt::format("{} {:.1f} s ({})", name, seconds, percent(seconds / w.total_s));
+  };
+  return fmt::format(
+      "<p id=\"wall-breakdown\">Where its time went ({:.1f} s in the parts that have ended): "
+      "{}, {}, {}, {}, {}.</p>\n",
+      w.total_s, phase("rollouts", w.rollout_s), phase("updates", w.update_s),
+      phase("evaluation", w.eval_s), phase("checkpoints and store writes", w.report_s),
+      phase("other", w.other_s));
+}
+
 }  // namespace
 
 std::string overview_page(const std::vector<store::RunRecord>& runs,
@@ -97,6 +115,7 @@ std::string run_page(const store::RunRecord& run,
       escape_xml(run.spec.object), run.spec.seed, store::run_outcome(run.state, run.reached),
       run.env_steps);
   if (!run.error.empty()) body += fmt::format("<p class=\"bad\">{}</p>\n", escape_xml(run.error));
+  body += wall_breakdown_html(run.wall);
   body +=
       "<h2>Checkpoints</h2>\n<table id=\"checkpoints\"><tr><th>checkpoint</th><th>steps</th>"
       "<th>evaluated success</th><th>size</th><th>created</th></tr>\n";

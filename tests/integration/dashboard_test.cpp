@@ -133,6 +133,29 @@ TEST_F(Dashboard, ARunsCurveIsDrawnByItsScriptFromTheLiveJson) {
   EXPECT_EQ(count(json, "\"env_steps\":"), 5) << json << " (the run's and four points)";
 }
 
+TEST_F(Dashboard, ARunsPageSaysWhereItsTimeWent) {
+  const std::string path = "/runs/" + std::to_string(training_run_);
+  EXPECT_NE(http_get(port_, path)
+                .find("<p id=\"wall-breakdown\">Where its time went: nothing "
+                      "recorded yet"),
+            std::string::npos);
+  {
+    store::RunStore store(db_);
+    store.add_wall_time(training_run_, {.rollout_s = 1.0,
+                                        .update_s = 4.0,
+                                        .eval_s = 4.5,
+                                        .report_s = 0.25,
+                                        .other_s = 0.25,
+                                        .total_s = 10.0});
+  }
+  const std::string page = http_get(port_, path);
+  EXPECT_NE(page.find("Where its time went (10.0 s in the parts that have ended): rollouts 1.0 s "
+                      "(10.0%), updates 4.0 s (40.0%), evaluation 4.5 s (45.0%), checkpoints and "
+                      "store writes 0.2 s (2.5%), other 0.2 s (2.5%).</p>"),
+            std::string::npos)
+      << page;
+}
+
 TEST_F(Dashboard, EpisodesOfTheServedHierarchyAreDrawn) {
   const std::string dom = browse("/episodes?count=2&seed=880000", "episodes");
   EXPECT_NE(dom.find("data-episodes=\"2\""), std::string::npos) << dom;
