@@ -22,6 +22,8 @@ struct WallBreakdown {
   double other_s = 0;
   double total_s = 0;  // the phases' sum
 
+  double phases_sum() const { return rollout_s + update_s + eval_s + report_s + other_s; }
+
   WallBreakdown& operator+=(const WallBreakdown& more) {
     rollout_s += more.rollout_s;
     update_s += more.update_s;

@@ -48,7 +48,7 @@ RunRecord read_run(const Statement& st) {
   w.eval_s = st.column_double(24);
   w.report_s = st.column_double(25);
   w.other_s = st.column_double(26);
-  w.total_s = w.rollout_s + w.update_s + w.eval_s + w.report_s + w.other_s;
+  w.total_s = w.phases_sum();
   return r;
 }
 

@@ -201,7 +201,7 @@ WallBreakdown from_proto(const common::v1::WallBreakdown& wall) {
   out.eval_s = wall.eval_s();
   out.report_s = wall.report_s();
   out.other_s = wall.other_s();
-  out.total_s = out.rollout_s + out.update_s + out.eval_s + out.report_s + out.other_s;
+  out.total_s = out.phases_sum();
   return out;
 }
 
